@@ -1,0 +1,305 @@
+//! Rigid-body dynamics of the planar model, generic over the scalar type.
+//!
+//! `D(q) q̈ + H(q, q̇) = B u + J_c(q)ᵀ λ`, with
+//! - `D = Σ_b m_b J_bᵀ J_b + I_b J_θbᵀ J_θb` (COM Jacobians J_b, angular Jacobians J_θb),
+//! - `H = Σ_b m_b J_bᵀ (J̇_b q̇ + [0, g])`, the projected Newton–Euler form: planar bodies have
+//!   no gyroscopic term and the angular bias accelerations vanish, so this is the whole of
+//!   Coriolis, centrifugal and gravity terms. The tests check it against the Lagrangian
+//!   (Christoffel symbols of D, differentiated with dual numbers) and energy conservation.
+//!
+//! The stance foot is a holonomic constraint `p_st(q) = const` with contact force λ = (F_x, F_z)
+//! in the world; the impact with the ground is rigid and plastic (the paper's reset map Δ, with the
+//! left/right relabeling in [`PlanarModel::reset_map`]).
+
+use crate::linalg::solve_in_place;
+use crate::robot::{BodyInertia, PlanarModel, Side};
+use crate::{ModelError, Real, Result};
+use nalgebra::{DMatrix, DVector};
+
+/// Mass matrix, drift and the body states they came from.
+#[derive(Clone, Debug)]
+pub struct Dynamics<S: Real> {
+    /// D(q), dof × dof.
+    pub mass_matrix: DMatrix<S>,
+    /// H(q, q̇) = C(q, q̇) q̇ + G(q).
+    pub drift: DVector<S>,
+}
+
+/// Result of the constrained (stance) dynamics.
+#[derive(Clone, Debug)]
+pub struct ConstrainedDynamics<S: Real> {
+    /// q̈, rad/s² or m/s².
+    pub ddq: DVector<S>,
+    /// Contact force on the robot at each constrained frame, world (F_x, F_z), N.
+    pub forces_n: Vec<[S; 2]>,
+}
+
+/// Result of the impact map.
+#[derive(Clone, Debug)]
+pub struct Impact<S: Real> {
+    /// Post-impact velocity (before relabeling).
+    pub dq_plus: DVector<S>,
+    /// Impulse on the robot at the impacting foot, world (Λ_x, Λ_z), N·s.
+    pub impulse_ns: [S; 2],
+}
+
+/// Post-impact state after the relabeling.
+#[derive(Clone, Debug)]
+pub struct Reset<S: Real> {
+    /// Relabeled configuration.
+    pub q: Vec<S>,
+    /// Relabeled velocity.
+    pub dq: Vec<S>,
+    /// Impulse on the robot at the impacting foot, N·s.
+    pub impulse_ns: [S; 2],
+}
+
+fn lift<S: Real>(i: &BodyInertia<f64>) -> BodyInertia<S> {
+    BodyInertia {
+        mass_kg: S::from(i.mass_kg),
+        com_xz_m: [S::from(i.com_xz_m[0]), S::from(i.com_xz_m[1])],
+        inertia_yy_kgm2: S::from(i.inertia_yy_kgm2),
+    }
+}
+
+impl PlanarModel {
+    /// The model's mass properties, one per body, lifted to the scalar type.
+    pub fn inertias<S: Real>(&self) -> Vec<BodyInertia<S>> {
+        self.bodies.iter().map(|b| lift(&b.inertia)).collect()
+    }
+
+    /// D(q) and H(q, q̇) with the model's own mass properties.
+    pub fn dynamics<S: Real>(&self, q: &[S], dq: &[S]) -> Result<Dynamics<S>> {
+        self.dynamics_with(&self.inertias(), q, dq)
+    }
+
+    /// D(q) and H(q, q̇) with the given mass properties (one per body), so that the co-design can
+    /// differentiate through link inertias that depend on link lengths.
+    pub fn dynamics_with<S: Real>(
+        &self,
+        inertias: &[BodyInertia<S>],
+        q: &[S],
+        dq: &[S],
+    ) -> Result<Dynamics<S>> {
+        if inertias.len() != self.bodies.len() {
+            return Err(ModelError::Dimension {
+                what: "inertias",
+                expected: self.bodies.len(),
+                found: inertias.len(),
+            });
+        }
+        let st = self.body_states(q, dq)?;
+        let n = self.dof();
+        let z = S::zero();
+        let mut dmat = DMatrix::from_element(n, n, z);
+        let mut h = DVector::from_element(n, z);
+        let g = S::from(self.gravity_mps2);
+        let mut jac = DMatrix::from_element(2, n, z);
+        let mut cols: Vec<usize> = Vec::with_capacity(n);
+        for (b, inertia) in inertias.iter().enumerate() {
+            if inertia.mass_kg.re() == 0.0 && inertia.inertia_yy_kgm2.re() == 0.0 {
+                continue;
+            }
+            let m = inertia.mass_kg;
+            let com = self.point_position(&st, b, inertia.com_xz_m);
+            jac.fill(z);
+            cols.clear();
+            cols.extend(0..crate::robot::BASE_DOF);
+            cols.extend(
+                self.bodies[b]
+                    .joint_path
+                    .iter()
+                    .map(|&j| self.joints[j].coordinate),
+            );
+            self.point_jacobian_into(&st, b, com, |r, c, v| jac[(r, c)] = v);
+            let bias = self.point_bias_acceleration(&st, b, inertia.com_xz_m);
+            let f = [m * bias[0], m * (bias[1] + g)];
+            for &i in &cols {
+                h[i] += jac[(0, i)] * f[0] + jac[(1, i)] * f[1];
+                for &k in &cols {
+                    dmat[(i, k)] += m * (jac[(0, i)] * jac[(0, k)] + jac[(1, i)] * jac[(1, k)]);
+                }
+            }
+            let ang = self.angular_jacobian(b);
+            for i in 0..n {
+                if ang[i] == 0.0 {
+                    continue;
+                }
+                for k in 0..n {
+                    if ang[k] != 0.0 {
+                        dmat[(i, k)] += inertia.inertia_yy_kgm2 * (ang[i] * ang[k]);
+                    }
+                }
+            }
+        }
+        Ok(Dynamics {
+            mass_matrix: dmat,
+            drift: h,
+        })
+    }
+
+    /// Kinetic energy ½ Σ (m |v_com|² + I ω²) from the velocity recursion (independent of D), J.
+    pub fn kinetic_energy<S: Real>(&self, q: &[S], dq: &[S]) -> Result<S> {
+        let st = self.body_states(q, dq)?;
+        let mut t = S::zero();
+        for (b, body) in self.bodies.iter().enumerate() {
+            let i = lift::<S>(&body.inertia);
+            let v = self.point_velocity(&st, b, i.com_xz_m);
+            let w = st.omega[b];
+            t += (i.mass_kg * (v[0] * v[0] + v[1] * v[1]) + i.inertia_yy_kgm2 * w * w) * 0.5;
+        }
+        Ok(t)
+    }
+
+    /// Potential energy Σ m g z_com (zero at z = 0), J.
+    pub fn potential_energy<S: Real>(&self, q: &[S]) -> Result<S> {
+        let st = self.body_poses(q)?;
+        let mut v = S::zero();
+        for (b, body) in self.bodies.iter().enumerate() {
+            let com = self.body_com_in(&st, b);
+            v += com[1] * (body.inertia.mass_kg * self.gravity_mps2);
+        }
+        Ok(v)
+    }
+
+    /// Angular momentum about the world point `p` (about +y), kg·m²/s.
+    pub fn angular_momentum_about<S: Real>(&self, q: &[S], dq: &[S], p: [S; 2]) -> Result<S> {
+        let st = self.body_states(q, dq)?;
+        let mut l = S::zero();
+        for (b, body) in self.bodies.iter().enumerate() {
+            let i = lift::<S>(&body.inertia);
+            let c = self.point_position(&st, b, i.com_xz_m);
+            let v = self.point_velocity(&st, b, i.com_xz_m);
+            let r = [c[0] - p[0], c[1] - p[1]];
+            l += i.mass_kg * (r[1] * v[0] - r[0] * v[1]) + i.inertia_yy_kgm2 * st.omega[b];
+        }
+        Ok(l)
+    }
+
+    /// Maps actuator torques (one per actuated joint, N·m) to generalized forces B u.
+    pub fn generalized_forces<S: Real>(&self, u: &[S]) -> Result<DVector<S>> {
+        let act = self.actuated_joints();
+        if u.len() != act.len() {
+            return Err(ModelError::Dimension {
+                what: "u",
+                expected: act.len(),
+                found: u.len(),
+            });
+        }
+        let mut f = DVector::from_element(self.dof(), S::zero());
+        for (k, &j) in act.iter().enumerate() {
+            f[self.joints[j].coordinate] = u[k];
+        }
+        Ok(f)
+    }
+
+    /// Flight dynamics (no contact, design joints rigid).
+    pub fn forward_dynamics<S: Real>(&self, q: &[S], dq: &[S], u: &[S]) -> Result<DVector<S>> {
+        Ok(self.constrained_dynamics(q, dq, u, &[])?.ddq)
+    }
+
+    /// Dynamics with the frames in `contacts` held fixed in the world (pinned point feet) and the
+    /// design joints rigid: solves `[D −Aᵀ; A 0] [q̈; λ] = [B u − H; −J̇ q̇]`, where A stacks the
+    /// contact Jacobians and a unit row per design joint (q̈_D = 0: the design is fixed on the
+    /// robot, the paper's q̇_D = 0).
+    pub fn constrained_dynamics<S: Real>(
+        &self,
+        q: &[S],
+        dq: &[S],
+        u: &[S],
+        contacts: &[usize],
+    ) -> Result<ConstrainedDynamics<S>> {
+        let n = self.dof();
+        let nc = 2 * contacts.len();
+        let design = self.design_joints();
+        let m = nc + design.len();
+        let dy = self.dynamics(q, dq)?;
+        let bu = self.generalized_forces(u)?;
+        let st = self.body_states(q, dq)?;
+        let mut a = DMatrix::from_element(n + m, n + m, S::zero());
+        let mut rhs = DVector::from_element(n + m, S::zero());
+        a.view_mut((0, 0), (n, n)).copy_from(&dy.mass_matrix);
+        for i in 0..n {
+            rhs[i] = bu[i] - dy.drift[i];
+        }
+        for (k, &frame) in contacts.iter().enumerate() {
+            let jac = self.frame_jacobian(&st, frame);
+            let bias = self.frame_bias_acceleration_in(&st, frame);
+            for r in 0..2 {
+                for c in 0..n {
+                    a[(n + 2 * k + r, c)] = jac[(r, c)];
+                    a[(c, n + 2 * k + r)] = -jac[(r, c)];
+                }
+                rhs[n + 2 * k + r] = -bias[r];
+            }
+        }
+        for (k, &j) in design.iter().enumerate() {
+            let c = self.joints[j].coordinate;
+            a[(n + nc + k, c)] = S::one();
+            a[(c, n + nc + k)] = -S::one();
+        }
+        solve_in_place(&mut a, &mut rhs, "constrained dynamics")?;
+        let ddq = DVector::from_iterator(n, rhs.iter().take(n).copied());
+        let forces_n = (0..contacts.len())
+            .map(|k| [rhs[n + 2 * k], rhs[n + 2 * k + 1]])
+            .collect();
+        Ok(ConstrainedDynamics { ddq, forces_n })
+    }
+
+    /// Rigid, plastic impact of frame `impact_frame` with the ground: the frame comes to rest,
+    /// the design joints stay rigid, every other point is free (the old stance foot may lift off;
+    /// the planner checks that it does). Solves `[D −Aᵀ; A 0] [q̇⁺; Λ] = [D q̇⁻; A_D q̇⁻]` with A the
+    /// foot Jacobian and the design-joint rows.
+    pub fn impact<S: Real>(
+        &self,
+        q: &[S],
+        dq_minus: &[S],
+        impact_frame: usize,
+    ) -> Result<Impact<S>> {
+        let n = self.dof();
+        let design = self.design_joints();
+        let m = 2 + design.len();
+        let dy = self.dynamics(q, dq_minus)?;
+        let st = self.body_poses(q)?;
+        let jac = self.frame_jacobian(&st, impact_frame);
+        let mut a = DMatrix::from_element(n + m, n + m, S::zero());
+        let mut rhs = DVector::from_element(n + m, S::zero());
+        a.view_mut((0, 0), (n, n)).copy_from(&dy.mass_matrix);
+        for i in 0..n {
+            rhs[i] = (0..n).fold(S::zero(), |acc, k| {
+                acc + dy.mass_matrix[(i, k)] * dq_minus[k]
+            });
+        }
+        for r in 0..2 {
+            for c in 0..n {
+                a[(n + r, c)] = jac[(r, c)];
+                a[(c, n + r)] = -jac[(r, c)];
+            }
+        }
+        for (k, &j) in design.iter().enumerate() {
+            let c = self.joints[j].coordinate;
+            a[(n + 2 + k, c)] = S::one();
+            a[(c, n + 2 + k)] = -S::one();
+            rhs[n + 2 + k] = dq_minus[c];
+        }
+        solve_in_place(&mut a, &mut rhs, "impact map")?;
+        Ok(Impact {
+            dq_plus: DVector::from_iterator(n, rhs.iter().take(n).copied()),
+            impulse_ns: [rhs[n], rhs[n + 1]],
+        })
+    }
+
+    /// The paper's reset map Δ: impact of the `swing` leg's foot, then the left/right relabeling,
+    /// so that the post-impact state is again a state with the *other* leg (the old stance leg's
+    /// side) in the swing role.
+    pub fn reset_map<S: Real>(&self, q: &[S], dq_minus: &[S], swing: Side) -> Result<Reset<S>> {
+        let legs = self.legs()?;
+        let imp = self.impact(q, dq_minus, legs.side(swing).foot)?;
+        let dq_plus: Vec<S> = imp.dq_plus.iter().copied().collect();
+        Ok(Reset {
+            q: self.relabel(q),
+            dq: self.relabel(&dq_plus),
+            impulse_ns: imp.impulse_ns,
+        })
+    }
+}

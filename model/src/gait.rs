@@ -1,0 +1,346 @@
+//! The versioned JSON gait file: everything the runtime needs to execute a planned HZD gait, and
+//! everything a reader needs to trust it (which robot, which design, which solver, how well).
+//!
+//! Outputs are joint angles named by role: `y^a = [stance hip, stance knee, swing hip, swing knee]`
+//! for ADAM. With the state-based phase, `y^d_i(τ) = Bézier(α_i, τ)` with τ from
+//! [`crate::phase::state_phase`]. The file describes one step with `stance_leg` in stance; the
+//! next step uses the same α with the legs relabeled.
+
+use crate::bezier::MAX_BEZIER_DEGREE;
+use crate::design::DesignLengths;
+use crate::robot::Side;
+use crate::{ModelError, Result};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::path::Path;
+
+/// The schema version this build reads and writes.
+pub const GAIT_SCHEMA_VERSION: u32 = 1;
+
+/// Which leg a joint of an output belongs to, relative to the current step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LegRole {
+    /// The leg on the ground.
+    Stance,
+    /// The leg in the air.
+    Swing,
+}
+
+/// One controlled output: a joint angle, named by role.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutputDefinition {
+    /// Output name, e.g. `stance_knee`.
+    pub name: String,
+    /// Stance or swing leg.
+    pub leg: LegRole,
+    /// Joint name without the side prefix, e.g. `knee_pitch`; the joint is `<side>_<joint>`.
+    pub joint: String,
+}
+
+impl OutputDefinition {
+    /// The URDF joint name of this output when `stance` is the stance leg.
+    pub fn joint_name(&self, stance: Side) -> String {
+        let side = match self.leg {
+            LegRole::Stance => stance,
+            LegRole::Swing => stance.other(),
+        };
+        format!("{}_{}", side.prefix(), self.joint)
+    }
+
+    /// ADAM's four outputs: stance hip, stance knee, swing hip, swing knee.
+    pub fn adam() -> Vec<Self> {
+        [
+            ("stance_hip", LegRole::Stance, "hip_pitch"),
+            ("stance_knee", LegRole::Stance, "knee_pitch"),
+            ("swing_hip", LegRole::Swing, "hip_pitch"),
+            ("swing_knee", LegRole::Swing, "knee_pitch"),
+        ]
+        .into_iter()
+        .map(|(n, l, j)| Self {
+            name: n.into(),
+            leg: l,
+            joint: j.into(),
+        })
+        .collect()
+    }
+}
+
+/// How τ is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum PhaseDefinition {
+    /// τ = (θ − θ⁺) / (θ⁻ − θ⁺), θ the stance-leg angle (see [`crate::phase`]).
+    StateBased {
+        /// θ just after impact, rad.
+        theta_plus_rad: f64,
+        /// θ just before impact, rad.
+        theta_minus_rad: f64,
+    },
+    /// τ = t / T with T the gait's step duration.
+    TimeBased,
+}
+
+/// The Bézier coefficients of the desired outputs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BezierSpec {
+    /// Degree b.
+    pub degree: usize,
+    /// α, one row of b + 1 coefficients per output, rad.
+    pub alpha: Vec<Vec<f64>>,
+}
+
+/// Which robot model the gait was planned for.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotReference {
+    /// Robot name from the URDF.
+    pub name: String,
+    /// Path of the URDF, relative to the gait file's folder.
+    pub urdf: String,
+    /// SHA-256 of the URDF text, lower-case hex.
+    pub sha256: String,
+}
+
+/// A state of the robot: coordinates and velocities in the model's order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotState {
+    /// q.
+    pub q: Vec<f64>,
+    /// q̇.
+    pub dq: Vec<f64>,
+}
+
+/// How the gait was found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverSummary {
+    /// Solver name and version.
+    pub solver: String,
+    /// Final status (`optimal`, `acceptable`, ...).
+    pub status: String,
+    /// Interior-point iterations, all stages.
+    pub iterations: usize,
+    /// Wall time of the solves, s.
+    pub solve_time_s: f64,
+    /// Final objective.
+    pub objective: f64,
+    /// Largest constraint violation at the solution.
+    pub constraint_violation: f64,
+}
+
+/// A planned periodic HZD gait.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaitFile {
+    /// Must equal [`GAIT_SCHEMA_VERSION`].
+    pub schema_version: u32,
+    /// The robot model.
+    pub robot: RobotReference,
+    /// Thigh and shin lengths.
+    pub design: DesignLengths,
+    /// The controlled outputs, in the row order of α.
+    pub outputs: Vec<OutputDefinition>,
+    /// Bézier degree and coefficients.
+    pub bezier: BezierSpec,
+    /// Phase variable.
+    pub phase: PhaseDefinition,
+    /// The stance leg of the planned step.
+    pub stance_leg: Side,
+    /// Step duration, s.
+    pub step_duration_s: f64,
+    /// Step length, m.
+    pub step_length_m: f64,
+    /// Mean forward speed, m/s.
+    pub speed_mps: f64,
+    /// Mechanical cost of transport (dimensionless).
+    pub cost_of_transport: f64,
+    /// The post-impact state x⁺ at the start of the step (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub initial_state: Option<RobotState>,
+    /// Solver summary.
+    pub solver: SolverSummary,
+}
+
+/// SHA-256 of a text, lower-case hex.
+pub fn sha256_hex(text: &str) -> String {
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+impl GaitFile {
+    /// Reads and validates a gait file; errors name the file and the field.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|error| ModelError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        Self::from_json(&text, &origin)
+    }
+
+    /// Parses and validates gait JSON; `origin` names the source in errors.
+    pub fn from_json(text: &str, origin: &str) -> Result<Self> {
+        // Check the version before the schema, so a file from another version gets that error.
+        let raw: serde_json::Value = serde_json::from_str(text).map_err(|e| ModelError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        let version = raw
+            .get("schema_version")
+            .cloned()
+            .unwrap_or(serde_json::Value::Null);
+        if version.as_u64() != Some(GAIT_SCHEMA_VERSION as u64) {
+            return Err(ModelError::InvalidField {
+                origin: origin.to_string(),
+                field: "schema_version".into(),
+                value: version.to_string(),
+                reason: format!("this build reads gait schema version {GAIT_SCHEMA_VERSION}"),
+            });
+        }
+        let gait: Self = serde_json::from_value(raw).map_err(|e| ModelError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        gait.validate(origin)?;
+        Ok(gait)
+    }
+
+    /// Writes the gait as pretty JSON after validating it.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        self.validate(&path.display().to_string())?;
+        let text = serde_json::to_string_pretty(self).map_err(|e| ModelError::Parse {
+            origin: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        std::fs::write(path, text + "\n").map_err(|error| ModelError::Io {
+            path: path.to_path_buf(),
+            error,
+        })
+    }
+
+    /// Rejects NaN/inf, wrong shapes, unknown versions and a degenerate phase (θ⁺ = θ⁻), naming
+    /// the field and value.
+    pub fn validate(&self, origin: &str) -> Result<()> {
+        let invalid = |field: String, value: String, reason: &str| ModelError::InvalidField {
+            origin: origin.to_string(),
+            field,
+            value,
+            reason: reason.to_string(),
+        };
+        if self.schema_version != GAIT_SCHEMA_VERSION {
+            return Err(invalid(
+                "schema_version".into(),
+                self.schema_version.to_string(),
+                "unknown schema version",
+            ));
+        }
+        let finite = |field: &str, v: f64| -> Result<()> {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(invalid(field.into(), v.to_string(), "must be finite"))
+            }
+        };
+        let positive = |field: &str, v: f64| -> Result<()> {
+            finite(field, v)?;
+            if v > 0.0 {
+                Ok(())
+            } else {
+                Err(invalid(field.into(), v.to_string(), "must be positive"))
+            }
+        };
+        positive("design.thigh_length_m", self.design.thigh_length_m)?;
+        positive("design.shin_length_m", self.design.shin_length_m)?;
+        positive("step_duration_s", self.step_duration_s)?;
+        finite("step_length_m", self.step_length_m)?;
+        finite("speed_mps", self.speed_mps)?;
+        finite("cost_of_transport", self.cost_of_transport)?;
+        finite("solver.solve_time_s", self.solver.solve_time_s)?;
+        finite("solver.objective", self.solver.objective)?;
+        finite(
+            "solver.constraint_violation",
+            self.solver.constraint_violation,
+        )?;
+        if self.robot.sha256.len() != 64
+            || !self.robot.sha256.bytes().all(|b| b.is_ascii_hexdigit())
+        {
+            return Err(invalid(
+                "robot.sha256".into(),
+                format!("{:?}", self.robot.sha256),
+                "must be 64 hex digits",
+            ));
+        }
+        if self.outputs.is_empty() {
+            return Err(invalid(
+                "outputs".into(),
+                "[]".into(),
+                "at least one output is needed",
+            ));
+        }
+        let b = self.bezier.degree;
+        if !(1..=MAX_BEZIER_DEGREE).contains(&b) {
+            return Err(invalid(
+                "bezier.degree".into(),
+                b.to_string(),
+                &format!("must be in 1..={MAX_BEZIER_DEGREE}"),
+            ));
+        }
+        if self.bezier.alpha.len() != self.outputs.len() {
+            return Err(invalid(
+                "bezier.alpha".into(),
+                format!("{} rows", self.bezier.alpha.len()),
+                &format!("needs one row per output ({})", self.outputs.len()),
+            ));
+        }
+        for (i, row) in self.bezier.alpha.iter().enumerate() {
+            if row.len() != b + 1 {
+                return Err(invalid(
+                    format!("bezier.alpha[{i}]"),
+                    format!("{} coefficients", row.len()),
+                    &format!("degree {b} needs {}", b + 1),
+                ));
+            }
+            for (k, v) in row.iter().enumerate() {
+                finite(&format!("bezier.alpha[{i}][{k}]"), *v)?;
+            }
+        }
+        if let PhaseDefinition::StateBased {
+            theta_plus_rad,
+            theta_minus_rad,
+        } = self.phase
+        {
+            finite("phase.theta_plus_rad", theta_plus_rad)?;
+            finite("phase.theta_minus_rad", theta_minus_rad)?;
+            if (theta_minus_rad - theta_plus_rad).abs() < 1e-6 {
+                return Err(invalid(
+                    "phase.theta_minus_rad".into(),
+                    theta_minus_rad.to_string(),
+                    &format!("must differ from theta_plus_rad = {theta_plus_rad} (τ would divide by zero)"),
+                ));
+            }
+        }
+        if let Some(state) = &self.initial_state {
+            if state.q.len() != state.dq.len() {
+                return Err(invalid(
+                    "initial_state.dq".into(),
+                    format!("{} entries", state.dq.len()),
+                    &format!("must match initial_state.q ({})", state.q.len()),
+                ));
+            }
+            for (name, v) in [("q", &state.q), ("dq", &state.dq)] {
+                for (k, x) in v.iter().enumerate() {
+                    finite(&format!("initial_state.{name}[{k}]"), *x)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,292 @@
+//! Planar forward kinematics, Jacobians, velocities and bias accelerations, generic over the
+//! scalar type (f64 or any num-dual number) so that the planner differentiates them exactly.
+//!
+//! Conventions: a world vector is `[x, z]`; `rot(θ, v)` rotates a body-frame vector into the
+//! world for a body at pitch θ about +y; `perp(r) = ω̂ × r = [r_z, −r_x]` is the velocity of the
+//! point r of a body spinning at unit rate about +y. The pose and bias-acceleration routines work
+//! on fixed-size arrays and never allocate, so the runtime may call them inside its control tick.
+
+use crate::robot::{JointKind, PlanarModel, MAX_BODIES, MAX_DOF};
+use crate::{ModelError, Real, Result};
+use nalgebra::DMatrix;
+
+/// Position and orientation of a body frame in the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose<S> {
+    /// Origin (x, z), m.
+    pub xz_m: [S; 2],
+    /// Pitch about +y, rad.
+    pub pitch_rad: S,
+}
+
+/// Rotates a body-frame vector into the world for a frame at pitch θ.
+#[inline]
+pub fn rot<S: Real>(pitch: S, v: [S; 2]) -> [S; 2] {
+    let (s, c) = pitch.sin_cos();
+    [c * v[0] + s * v[1], c * v[1] - s * v[0]]
+}
+
+/// `ω̂ × r` for a unit angular velocity about +y.
+#[inline]
+pub fn perp<S: Real>(r: [S; 2]) -> [S; 2] {
+    [r[1], -r[0]]
+}
+
+#[inline]
+fn add<S: Real>(a: [S; 2], b: [S; 2]) -> [S; 2] {
+    [a[0] + b[0], a[1] + b[1]]
+}
+#[inline]
+fn sub<S: Real>(a: [S; 2], b: [S; 2]) -> [S; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+#[inline]
+fn scale<S: Real>(k: S, a: [S; 2]) -> [S; 2] {
+    [k * a[0], k * a[1]]
+}
+#[inline]
+fn c2<S: Real>(v: [f64; 2]) -> [S; 2] {
+    [S::from(v[0]), S::from(v[1])]
+}
+
+/// Fixed-capacity, allocation-free per-body state: poses, and optionally velocities.
+#[derive(Clone, Copy, Debug)]
+pub struct BodyStates<S> {
+    /// Number of valid entries.
+    pub len: usize,
+    /// Pose of each body.
+    pub pose: [Pose<S>; MAX_BODIES],
+    /// Origin velocity of each body, m/s.
+    pub vel_xz: [[S; 2]; MAX_BODIES],
+    /// Angular velocity of each body about +y, rad/s.
+    pub omega: [S; MAX_BODIES],
+    /// Bias (velocity-product) acceleration of each body origin, m/s²: the origin acceleration
+    /// when q̈ = 0. Angular bias accelerations are zero in the plane.
+    pub bias_acc_xz: [[S; 2]; MAX_BODIES],
+}
+
+impl PlanarModel {
+    fn check_len(&self, what: &'static str, v: usize) -> Result<()> {
+        if v != self.dof() {
+            return Err(ModelError::Dimension {
+                what,
+                expected: self.dof(),
+                found: v,
+            });
+        }
+        Ok(())
+    }
+
+    /// Poses of every body at q, with zero velocities. Never allocates.
+    pub fn body_poses<S: Real>(&self, q: &[S]) -> Result<BodyStates<S>> {
+        let zeros = [S::zero(); MAX_DOF];
+        self.body_states(q, &zeros[..q.len().min(MAX_DOF)])
+    }
+
+    /// Poses, velocities and bias accelerations of every body at (q, q̇). Never allocates.
+    pub fn body_states<S: Real>(&self, q: &[S], dq: &[S]) -> Result<BodyStates<S>> {
+        self.check_len("q", q.len())?;
+        self.check_len("dq", dq.len())?;
+        let z = S::zero();
+        let mut st = BodyStates {
+            len: self.bodies.len(),
+            pose: [Pose {
+                xz_m: [z, z],
+                pitch_rad: z,
+            }; MAX_BODIES],
+            vel_xz: [[z, z]; MAX_BODIES],
+            omega: [z; MAX_BODIES],
+            bias_acc_xz: [[z, z]; MAX_BODIES],
+        };
+        st.pose[0] = Pose {
+            xz_m: [q[0], q[1]],
+            pitch_rad: q[2],
+        };
+        st.vel_xz[0] = [dq[0], dq[1]];
+        st.omega[0] = dq[2];
+        for (b, body) in self.bodies.iter().enumerate().skip(1) {
+            let (Some(p), Some(j)) = (body.parent, body.joint) else {
+                continue;
+            };
+            let joint = &self.joints[j];
+            let (qj, dqj) = (q[joint.coordinate], dq[joint.coordinate]);
+            let pp = st.pose[p];
+            let phi = pp.pitch_rad + S::from(body.origin_pitch_rad);
+            let mut d = rot(pp.pitch_rad, c2(body.origin_xz_m));
+            let wp = st.omega[p];
+            let mut v = add(st.vel_xz[p], scale(wp, perp(d)));
+            let (pitch, omega, extra_acc) = match joint.kind {
+                JointKind::Revolute { axis_sign } => {
+                    (phi + qj * axis_sign, wp + dqj * axis_sign, [z, z])
+                }
+                JointKind::Prismatic { axis_xz } => {
+                    let a = rot(phi, c2(axis_xz));
+                    d = add(d, scale(qj, a));
+                    v = add(add(st.vel_xz[p], scale(wp, perp(d))), scale(dqj, a));
+                    (phi, wp, scale(wp * dqj * 2.0, perp(a)))
+                }
+            };
+            st.pose[b] = Pose {
+                xz_m: add(pp.xz_m, d),
+                pitch_rad: pitch,
+            };
+            st.vel_xz[b] = v;
+            st.omega[b] = omega;
+            st.bias_acc_xz[b] = add(add(st.bias_acc_xz[p], scale(-(wp * wp), d)), extra_acc);
+        }
+        Ok(st)
+    }
+
+    /// World position of a point given in the frame of `body`.
+    pub fn point_position<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        local_xz: [S; 2],
+    ) -> [S; 2] {
+        let p = st.pose[body];
+        add(p.xz_m, rot(p.pitch_rad, local_xz))
+    }
+
+    /// World velocity of a point given in the frame of `body` (needs `body_states` with q̇).
+    pub fn point_velocity<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        local_xz: [S; 2],
+    ) -> [S; 2] {
+        let r = rot(st.pose[body].pitch_rad, local_xz);
+        add(st.vel_xz[body], scale(st.omega[body], perp(r)))
+    }
+
+    /// Bias acceleration J̇ q̇ of a point given in the frame of `body`.
+    pub fn point_bias_acceleration<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        local_xz: [S; 2],
+    ) -> [S; 2] {
+        let r = rot(st.pose[body].pitch_rad, local_xz);
+        let w = st.omega[body];
+        add(st.bias_acc_xz[body], scale(-(w * w), r))
+    }
+
+    /// Translational Jacobian (2 × dof) of the world point `p` moving with `body`.
+    pub fn point_jacobian<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        p: [S; 2],
+    ) -> DMatrix<S> {
+        let mut jac = DMatrix::from_element(2, self.dof(), S::zero());
+        self.point_jacobian_into(st, body, p, |row, col, v| jac[(row, col)] = v);
+        jac
+    }
+
+    /// Writes the non-zero entries of the point Jacobian through `set(row, col, value)`.
+    pub fn point_jacobian_into<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        p: [S; 2],
+        mut set: impl FnMut(usize, usize, S),
+    ) {
+        set(0, 0, S::one());
+        set(1, 1, S::one());
+        let r = perp(sub(p, st.pose[0].xz_m));
+        set(0, 2, r[0]);
+        set(1, 2, r[1]);
+        for &j in &self.bodies[body].joint_path {
+            let joint = &self.joints[j];
+            let c = joint.body;
+            let col = match joint.kind {
+                JointKind::Revolute { axis_sign } => {
+                    scale(S::from(axis_sign), perp(sub(p, st.pose[c].xz_m)))
+                }
+                JointKind::Prismatic { axis_xz } => rot(st.pose[c].pitch_rad, c2(axis_xz)),
+            };
+            set(0, joint.coordinate, col[0]);
+            set(1, joint.coordinate, col[1]);
+        }
+    }
+
+    /// Angular Jacobian (1 × dof, as a vector) of `body`: ∂pitch/∂q.
+    pub fn angular_jacobian(&self, body: usize) -> Vec<f64> {
+        let mut jac = vec![0.0; self.dof()];
+        jac[2] = 1.0;
+        for &j in &self.bodies[body].joint_path {
+            if let JointKind::Revolute { axis_sign } = self.joints[j].kind {
+                jac[self.joints[j].coordinate] = axis_sign;
+            }
+        }
+        jac
+    }
+
+    /// World position of frame `frame` at q (f64 convenience).
+    pub fn frame_position(&self, q: &[f64], frame: usize) -> Result<[f64; 2]> {
+        let st = self.body_poses(q)?;
+        Ok(self.frame_position_in(&st, frame))
+    }
+
+    /// World position of frame `frame` from computed body states.
+    pub fn frame_position_in<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> [S; 2] {
+        let f = &self.frames[frame];
+        self.point_position(st, f.body, c2(f.offset_xz_m))
+    }
+
+    /// World velocity of frame `frame` from computed body states.
+    pub fn frame_velocity_in<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> [S; 2] {
+        let f = &self.frames[frame];
+        self.point_velocity(st, f.body, c2(f.offset_xz_m))
+    }
+
+    /// Bias acceleration J̇q̇ of frame `frame` from computed body states.
+    pub fn frame_bias_acceleration_in<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> [S; 2] {
+        let f = &self.frames[frame];
+        self.point_bias_acceleration(st, f.body, c2(f.offset_xz_m))
+    }
+
+    /// Jacobian (2 × dof) of frame `frame`.
+    pub fn frame_jacobian<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> DMatrix<S> {
+        let p = self.frame_position_in(st, frame);
+        self.point_jacobian(st, self.frames[frame].body, p)
+    }
+
+    /// World position of a joint's axis (the origin of the body it moves) at q, m.
+    pub fn joint_position(&self, q: &[f64], joint: usize) -> Result<[f64; 2]> {
+        let st = self.body_poses(q)?;
+        Ok(st.pose[self.joints[joint].body].xz_m)
+    }
+
+    /// World position of the centre of mass of `body`.
+    pub fn body_com_in<S: Real>(&self, st: &BodyStates<S>, body: usize) -> [S; 2] {
+        self.point_position(st, body, c2(self.bodies[body].inertia.com_xz_m))
+    }
+
+    /// Whole-body centre of mass at q, m.
+    pub fn center_of_mass<S: Real>(&self, q: &[S]) -> Result<[S; 2]> {
+        let st = self.body_poses(q)?;
+        let mut acc = [S::zero(), S::zero()];
+        let mut m = 0.0;
+        for (b, body) in self.bodies.iter().enumerate() {
+            let mb = body.inertia.mass_kg;
+            if mb == 0.0 {
+                continue;
+            }
+            acc = add(acc, scale(S::from(mb), self.body_com_in(&st, b)));
+            m += mb;
+        }
+        Ok(scale(S::from(1.0 / m), acc))
+    }
+
+    /// Checks that the allocation-free kinematics can hold this model.
+    pub fn check_capacity(&self) -> Result<()> {
+        if self.bodies.len() > MAX_BODIES || self.dof() > MAX_DOF {
+            return Err(ModelError::TooManyBodies {
+                bodies: self.bodies.len(),
+                max: MAX_BODIES,
+            });
+        }
+        Ok(())
+    }
+}

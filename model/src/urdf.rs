@@ -1,0 +1,428 @@
+//! URDF → [`PlanarModel`]: reads a URDF with urdf-rs, checks that it is planar and a tree, merges
+//! fixed links into their parents (keeping them as named frames) and projects every inertial
+//! onto the sagittal plane (mass, x–z centre of mass, I_yy about the centre of mass, with the
+//! inertial's own rotation applied).
+
+use crate::robot::{Body, BodyInertia, Frame, Joint, JointKind, JointRole, PlanarModel};
+use crate::{ModelError, Result};
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+/// Standard gravity, m/s².
+pub const STANDARD_GRAVITY_MPS2: f64 = 9.81;
+
+const PLANAR_TOL: f64 = 1e-9;
+
+impl PlanarModel {
+    /// Loads a planar model from a URDF file. Errors name the file and the link or joint.
+    pub fn from_urdf_file(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|error| ModelError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        Self::from_urdf_str(&text, &path.display().to_string())
+    }
+
+    /// Loads a planar model from URDF text; `origin` names the source in error messages.
+    pub fn from_urdf_str(text: &str, origin: &str) -> Result<Self> {
+        let has_inertial = links_with_inertial(text, origin)?;
+        let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfSyntax {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        build(&robot, &has_inertial, origin)
+    }
+}
+
+/// For each `<link>`, whether it has an `<inertial>` child (urdf-rs silently defaults it to zero).
+fn links_with_inertial(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut out = HashMap::new();
+    let mut depth = 0usize;
+    let mut current: Option<(String, usize)> = None;
+    let syntax = |e: String| ModelError::UrdfSyntax {
+        origin: origin.to_string(),
+        message: e,
+    };
+    let name_of = |e: &quick_xml::events::BytesStart| -> String {
+        e.attributes()
+            .flatten()
+            .find(|a| a.key.as_ref() == b"name")
+            .map(|a| String::from_utf8_lossy(&a.value).into_owned())
+            .unwrap_or_default()
+    };
+    loop {
+        match reader.read_event().map_err(|e| syntax(e.to_string()))? {
+            Event::Start(e) => {
+                depth += 1;
+                if e.name().as_ref() == b"link" && depth == 2 {
+                    let name = name_of(&e);
+                    out.insert(name.clone(), false);
+                    current = Some((name, depth));
+                } else if e.name().as_ref() == b"inertial" {
+                    if let Some((name, d)) = &current {
+                        if depth == d + 1 {
+                            out.insert(name.clone(), true);
+                        }
+                    }
+                }
+            }
+            Event::Empty(e) => {
+                if e.name().as_ref() == b"link" && depth == 1 {
+                    out.insert(name_of(&e), false);
+                } else if e.name().as_ref() == b"inertial" {
+                    if let Some((name, d)) = &current {
+                        if depth == *d {
+                            out.insert(name.clone(), true);
+                        }
+                    }
+                }
+            }
+            Event::End(e) => {
+                if e.name().as_ref() == b"link" {
+                    current = None;
+                }
+                depth = depth.saturating_sub(1);
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    Ok(out)
+}
+
+/// Planar projection of a URDF inertial: (mass, com x–z in the link frame, I_yy about the com).
+fn project_inertial(link: &urdf_rs::Link, origin: &str) -> Result<BodyInertia<f64>> {
+    let i = &link.inertial;
+    let bad = |field: &'static str, value: f64| ModelError::BadInertial {
+        origin: origin.to_string(),
+        link: link.name.clone(),
+        field,
+        value,
+    };
+    let m = i.mass.value;
+    if !m.is_finite() || m < 0.0 {
+        return Err(bad("mass", m));
+    }
+    for (field, v) in [
+        ("ixx", i.inertia.ixx),
+        ("iyy", i.inertia.iyy),
+        ("izz", i.inertia.izz),
+        ("ixy", i.inertia.ixy),
+        ("ixz", i.inertia.ixz),
+        ("iyz", i.inertia.iyz),
+    ] {
+        if !v.is_finite() {
+            return Err(bad(field, v));
+        }
+    }
+    for (k, v) in i.origin.xyz.iter().chain(i.origin.rpy.iter()).enumerate() {
+        if !v.is_finite() {
+            return Err(bad(if k < 3 { "origin xyz" } else { "origin rpy" }, *v));
+        }
+    }
+    let t = nalgebra::Matrix3::new(
+        i.inertia.ixx,
+        i.inertia.ixy,
+        i.inertia.ixz,
+        i.inertia.ixy,
+        i.inertia.iyy,
+        i.inertia.iyz,
+        i.inertia.ixz,
+        i.inertia.iyz,
+        i.inertia.izz,
+    );
+    let [r, p, y] = *i.origin.rpy;
+    let rotm = nalgebra::Rotation3::from_euler_angles(r, p, y);
+    let iyy = (rotm.matrix() * t * rotm.matrix().transpose())[(1, 1)];
+    if iyy < 0.0 {
+        return Err(bad("iyy", iyy));
+    }
+    Ok(BodyInertia {
+        mass_kg: m,
+        com_xz_m: [i.origin.xyz[0], i.origin.xyz[2]],
+        inertia_yy_kgm2: iyy,
+    })
+}
+
+/// A planar rigid transform: translation (x, z) then pitch.
+#[derive(Clone, Copy)]
+struct Planar {
+    xz: [f64; 2],
+    pitch: f64,
+}
+
+impl Planar {
+    const IDENTITY: Self = Self {
+        xz: [0.0, 0.0],
+        pitch: 0.0,
+    };
+    fn apply(&self, v: [f64; 2]) -> [f64; 2] {
+        let r = crate::kinematics::rot(self.pitch, v);
+        [self.xz[0] + r[0], self.xz[1] + r[1]]
+    }
+    fn then(&self, child: &Planar) -> Planar {
+        Planar {
+            xz: self.apply(child.xz),
+            pitch: self.pitch + child.pitch,
+        }
+    }
+}
+
+fn joint_origin(j: &urdf_rs::Joint, origin: &str) -> Result<Planar> {
+    let [r, p, y] = *j.origin.rpy;
+    if r.abs() > PLANAR_TOL || y.abs() > PLANAR_TOL || !p.is_finite() {
+        return Err(ModelError::NonPlanar {
+            origin: origin.to_string(),
+            joint: j.name.clone(),
+            what: "origin rpy",
+            value: [r, p, y],
+        });
+    }
+    let xyz = *j.origin.xyz;
+    if xyz.iter().any(|v| !v.is_finite()) {
+        return Err(ModelError::NonPlanar {
+            origin: origin.to_string(),
+            joint: j.name.clone(),
+            what: "origin xyz",
+            value: xyz,
+        });
+    }
+    Ok(Planar {
+        xz: [xyz[0], xyz[2]],
+        pitch: p,
+    })
+}
+
+fn build(
+    robot: &urdf_rs::Robot,
+    has_inertial: &HashMap<String, bool>,
+    origin: &str,
+) -> Result<PlanarModel> {
+    let err_tree = |message: String| ModelError::NotATree {
+        origin: origin.to_string(),
+        message,
+    };
+    let links: HashMap<&str, &urdf_rs::Link> =
+        robot.links.iter().map(|l| (l.name.as_str(), l)).collect();
+    if links.len() != robot.links.len() {
+        return Err(err_tree("two links share a name".into()));
+    }
+    for l in &robot.links {
+        if !has_inertial.get(&l.name).copied().unwrap_or(false) {
+            return Err(ModelError::MissingInertial {
+                origin: origin.to_string(),
+                link: l.name.clone(),
+            });
+        }
+    }
+    let mut parent_of: HashMap<&str, &str> = HashMap::new();
+    for j in &robot.joints {
+        for (role, link) in [("parent", &j.parent.link), ("child", &j.child.link)] {
+            if !links.contains_key(link.as_str()) {
+                return Err(ModelError::UnknownLink {
+                    origin: origin.to_string(),
+                    joint: j.name.clone(),
+                    role,
+                    link: link.clone(),
+                });
+            }
+        }
+        if let Some(prev) = parent_of.insert(j.child.link.as_str(), j.parent.link.as_str()) {
+            return Err(err_tree(format!(
+                "link '{}' has two parents ('{prev}' and '{}'): a kinematic loop",
+                j.child.link, j.parent.link
+            )));
+        }
+    }
+    let roots: Vec<&str> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|n| !parent_of.contains_key(n))
+        .collect();
+    if roots.len() != 1 {
+        return Err(err_tree(if roots.is_empty() {
+            "no root link: every link has a parent, so the joints form a loop".to_string()
+        } else {
+            format!(
+                "{} root links ({}); expected exactly one",
+                roots.len(),
+                roots.join(", ")
+            )
+        }));
+    }
+    let root = roots[0];
+
+    let mut model = PlanarModel {
+        name: robot.name.clone(),
+        bodies: Vec::new(),
+        joints: Vec::new(),
+        frames: Vec::new(),
+        gravity_mps2: STANDARD_GRAVITY_MPS2,
+    };
+    // Depth-first from the root; each stack entry: (link, body it belongs to, link frame in body).
+    let mut visited: HashSet<&str> = HashSet::new();
+    let mut stack: Vec<(&str, usize, Planar)> = vec![(root, 0, Planar::IDENTITY)];
+    model.bodies.push(Body {
+        name: root.to_string(),
+        parent: None,
+        joint: None,
+        origin_xz_m: [0.0, 0.0],
+        origin_pitch_rad: 0.0,
+        inertia: BodyInertia::ZERO,
+        joint_path: Vec::new(),
+    });
+    while let Some((link_name, body, in_body)) = stack.pop() {
+        if !visited.insert(link_name) {
+            return Err(err_tree(format!("link '{link_name}' is reached twice")));
+        }
+        let link = links[link_name];
+        let local = project_inertial(link, origin)?;
+        let placed = BodyInertia {
+            mass_kg: local.mass_kg,
+            com_xz_m: in_body.apply(local.com_xz_m),
+            inertia_yy_kgm2: local.inertia_yy_kgm2,
+        };
+        model.bodies[body].inertia = model.bodies[body].inertia.combine(&placed);
+        model.frames.push(Frame {
+            name: link_name.to_string(),
+            body,
+            offset_xz_m: in_body.xz,
+            pitch_rad: in_body.pitch,
+        });
+        // Children in file order get their joints and bodies now; they are pushed so that the
+        // stack pops (and numbers their own children) in file order too.
+        let mut children: Vec<(&str, usize, Planar)> = Vec::new();
+        for j in robot.joints.iter().filter(|j| j.parent.link == link_name) {
+            let o = in_body.then(&joint_origin(j, origin)?);
+            let child = j.child.link.as_str();
+            let kind = match j.joint_type {
+                urdf_rs::JointType::Fixed => {
+                    children.push((child, body, o));
+                    continue;
+                }
+                urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
+                    let a = *j.axis.xyz;
+                    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                    if n.is_nan()
+                        || n <= 0.0
+                        || a[0].abs() > PLANAR_TOL * n
+                        || a[2].abs() > PLANAR_TOL * n
+                    {
+                        return Err(ModelError::NonPlanar {
+                            origin: origin.to_string(),
+                            joint: j.name.clone(),
+                            what: "axis",
+                            value: a,
+                        });
+                    }
+                    JointKind::Revolute {
+                        axis_sign: a[1].signum(),
+                    }
+                }
+                urdf_rs::JointType::Prismatic => {
+                    let a = *j.axis.xyz;
+                    let n = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                    if n.is_nan() || n <= 0.0 || a[1].abs() > PLANAR_TOL * n {
+                        return Err(ModelError::NonPlanar {
+                            origin: origin.to_string(),
+                            joint: j.name.clone(),
+                            what: "axis",
+                            value: a,
+                        });
+                    }
+                    JointKind::Prismatic {
+                        axis_xz: [a[0] / n, a[2] / n],
+                    }
+                }
+                ref other => {
+                    return Err(ModelError::UnsupportedJoint {
+                        origin: origin.to_string(),
+                        joint: j.name.clone(),
+                        kind: format!("{other:?}").to_lowercase(),
+                    })
+                }
+            };
+            let (lower, upper, effort, velocity) = limits(j, origin)?;
+            let body_index = model.bodies.len();
+            let joint_index = model.joints.len();
+            let mut joint_path = model.bodies[body].joint_path.clone();
+            joint_path.push(joint_index);
+            model.joints.push(Joint {
+                name: j.name.clone(),
+                kind,
+                role: match kind {
+                    JointKind::Revolute { .. } => JointRole::Actuated,
+                    JointKind::Prismatic { .. } => JointRole::Design,
+                },
+                body: body_index,
+                coordinate: crate::robot::BASE_DOF + joint_index,
+                lower,
+                upper,
+                effort_limit: effort,
+                velocity_limit: velocity,
+            });
+            model.bodies.push(Body {
+                name: child.to_string(),
+                parent: Some(body),
+                joint: Some(joint_index),
+                origin_xz_m: o.xz,
+                origin_pitch_rad: o.pitch,
+                inertia: BodyInertia::ZERO,
+                joint_path,
+            });
+            children.push((child, body_index, Planar::IDENTITY));
+        }
+        stack.extend(children.into_iter().rev());
+    }
+    if visited.len() != robot.links.len() {
+        let missing: Vec<&str> = robot
+            .links
+            .iter()
+            .map(|l| l.name.as_str())
+            .filter(|n| !visited.contains(n))
+            .collect();
+        return Err(err_tree(format!(
+            "links not reachable from root '{root}' (a loop): {}",
+            missing.join(", ")
+        )));
+    }
+    // Bodies were numbered in push order, which is not depth-first when a link has several
+    // movable children; parents always precede children, which is all the kinematics needs.
+    model.check_capacity()?;
+    Ok(model)
+}
+
+fn limits(j: &urdf_rs::Joint, origin: &str) -> Result<(f64, f64, f64, f64)> {
+    let l = &j.limit;
+    let bad = |field: &'static str, value: f64| ModelError::BadLimit {
+        origin: origin.to_string(),
+        joint: j.name.clone(),
+        field,
+        value,
+    };
+    if j.joint_type == urdf_rs::JointType::Continuous {
+        return Ok((
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            l.effort.max(0.0),
+            l.velocity.abs(),
+        ));
+    }
+    if l.lower.is_nan() {
+        return Err(bad("lower", l.lower));
+    }
+    if l.upper.is_nan() || l.upper < l.lower {
+        return Err(bad("upper", l.upper));
+    }
+    if l.effort.is_nan() || l.effort < 0.0 {
+        return Err(bad("effort", l.effort));
+    }
+    if l.velocity.is_nan() || l.velocity < 0.0 {
+        return Err(bad("velocity", l.velocity));
+    }
+    Ok((l.lower, l.upper, l.effort, l.velocity))
+}

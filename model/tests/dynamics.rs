@@ -1,0 +1,341 @@
+//! The dynamics checked against independent computations: the Lagrangian (Christoffel symbols of
+//! D from dual numbers), the kinetic energy from the velocity recursion, energy conservation, and
+//! finite differences.
+
+mod common;
+
+use common::*;
+use model::num_dual::Dual64;
+use model::{PlanarModel, Side};
+use nalgebra::{DMatrix, DVector};
+
+fn dual_at(q: &[f64], i: usize) -> Vec<Dual64> {
+    q.iter()
+        .enumerate()
+        .map(|(k, &v)| {
+            if k == i {
+                Dual64::from(v).derivative()
+            } else {
+                Dual64::from(v)
+            }
+        })
+        .collect()
+}
+
+/// ∂D/∂q_i for every i, by forward-mode dual numbers.
+fn mass_matrix_derivatives(model: &PlanarModel, q: &[f64]) -> Vec<DMatrix<f64>> {
+    let n = model.dof();
+    (0..n)
+        .map(|i| {
+            let qd = dual_at(q, i);
+            let zero = vec![Dual64::from(0.0); n];
+            let d = model.dynamics(&qd, &zero).expect("dynamics").mass_matrix;
+            d.map(|v| v.eps)
+        })
+        .collect()
+}
+
+/// Coriolis matrix from the Christoffel symbols of the first kind.
+fn christoffel_coriolis(dd: &[DMatrix<f64>], dq: &[f64]) -> DMatrix<f64> {
+    let n = dq.len();
+    DMatrix::from_fn(n, n, |k, j| {
+        (0..n)
+            .map(|i| 0.5 * (dd[i][(k, j)] + dd[j][(k, i)] - dd[k][(i, j)]) * dq[i])
+            .sum()
+    })
+}
+
+#[test]
+fn mass_matrix_is_symmetric_positive_definite_over_random_configurations() {
+    let model = adam();
+    let mut r = rng(1);
+    let mut worst_eig = f64::INFINITY;
+    for _ in 0..300 {
+        let q = random_q(&model, &mut r);
+        let d = model
+            .dynamics(&q, &vec![0.0; model.dof()])
+            .expect("dynamics")
+            .mass_matrix;
+        let asym = (&d - d.transpose()).abs().max() / d.abs().max();
+        assert!(asym < 1e-14, "D not symmetric: {asym}");
+        let eig = d.symmetric_eigenvalues().min();
+        worst_eig = worst_eig.min(eig);
+        assert!(eig > 0.0, "D not positive definite at {q:?}: λ_min = {eig}");
+    }
+    // The smallest eigenvalue belongs to the foot masses moving along the shin (0.06 kg).
+    assert!(worst_eig > 1e-4, "λ_min = {worst_eig}");
+}
+
+#[test]
+fn kinetic_energy_from_velocities_equals_quadratic_form_of_d() {
+    let model = adam();
+    let mut r = rng(2);
+    for _ in 0..100 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 2.0);
+        let d = model.dynamics(&q, &dq).expect("dynamics").mass_matrix;
+        let v = DVector::from_column_slice(&dq);
+        let quad = 0.5 * (v.transpose() * &d * &v)[0];
+        let t = model.kinetic_energy(&q, &dq).expect("energy");
+        assert!(
+            (quad - t).abs() <= 1e-12 * t.abs().max(1.0),
+            "{quad} vs {t}"
+        );
+    }
+}
+
+#[test]
+fn drift_equals_the_lagrangian_christoffel_form() {
+    let model = adam();
+    let mut r = rng(3);
+    for _ in 0..40 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 3.0);
+        let h = model.dynamics(&q, &dq).expect("dynamics").drift;
+        let dd = mass_matrix_derivatives(&model, &q);
+        let c = christoffel_coriolis(&dd, &dq);
+        let grav: Vec<f64> = (0..model.dof())
+            .map(|i| model.potential_energy(&dual_at(&q, i)).expect("V").eps)
+            .collect();
+        let lagrange = c * DVector::from_column_slice(&dq) + DVector::from_vec(grav);
+        let err = rel_diff(h.as_slice(), lagrange.as_slice());
+        assert!(err < 1e-12, "H differs from C q̇ + G by {err} (relative)");
+    }
+}
+
+#[test]
+fn d_dot_minus_two_c_is_skew_symmetric() {
+    let model = adam();
+    let mut r = rng(4);
+    for _ in 0..20 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 3.0);
+        let dd = mass_matrix_derivatives(&model, &q);
+        let n = model.dof();
+        let d_dot = (0..n).fold(DMatrix::zeros(n, n), |acc, i| acc + &dd[i] * dq[i]);
+        let n_mat = d_dot.clone() - christoffel_coriolis(&dd, &dq) * 2.0;
+        let sym = (&n_mat + n_mat.transpose()).abs().max() / d_dot.abs().max().max(1e-12);
+        assert!(sym < 1e-12, "Ḋ − 2C is not skew-symmetric: {sym}");
+    }
+}
+
+type Rhs<'a> = dyn Fn(&[f64], &[f64]) -> Vec<f64> + 'a;
+
+/// Integrates with classic RK4 and returns the largest |E − E0| relative to the largest kinetic
+/// energy reached (the energy that actually moved between kinetic and potential form).
+fn rk4_energy_drift(
+    model: &PlanarModel,
+    q0: &[f64],
+    dq0: &[f64],
+    f: &Rhs<'_>,
+    dt: f64,
+    t_end: f64,
+) -> (f64, f64) {
+    let energy = |q: &[f64], dq: &[f64]| {
+        model.kinetic_energy(q, dq).expect("T") + model.potential_energy(q).expect("V")
+    };
+    let (mut q, mut dq) = (q0.to_vec(), dq0.to_vec());
+    let e0 = energy(&q, &dq);
+    let (mut worst, mut t_max) = (0.0_f64, 0.0_f64);
+    let steps = (t_end / dt).round() as usize;
+    let axpy = |x: &[f64], k: f64, y: &[f64]| -> Vec<f64> {
+        x.iter().zip(y).map(|(a, b)| a + k * b).collect()
+    };
+    for _ in 0..steps {
+        let k1q = dq.clone();
+        let k1v = f(&q, &dq);
+        let (q2, v2) = (axpy(&q, dt / 2.0, &k1q), axpy(&dq, dt / 2.0, &k1v));
+        let k2v = f(&q2, &v2);
+        let (q3, v3) = (axpy(&q, dt / 2.0, &v2), axpy(&dq, dt / 2.0, &k2v));
+        let k3v = f(&q3, &v3);
+        let (q4, v4) = (axpy(&q, dt, &v3), axpy(&dq, dt, &k3v));
+        let k4v = f(&q4, &v4);
+        for i in 0..q.len() {
+            q[i] += dt / 6.0 * (k1q[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
+            dq[i] += dt / 6.0 * (k1v[i] + 2.0 * k2v[i] + 2.0 * k3v[i] + k4v[i]);
+        }
+        worst = worst.max((energy(&q, &dq) - e0).abs());
+        t_max = t_max.max(model.kinetic_energy(&q, &dq).expect("T"));
+    }
+    (worst / t_max, t_max)
+}
+
+#[test]
+fn energy_is_conserved_in_flight_with_zero_torque() {
+    let model = adam();
+    let mut r = rng(5);
+    let q0 = random_q(&model, &mut r);
+    let mut dq0 = random_dq(&model, &mut r, 1.0);
+    for j in model.design_joints() {
+        dq0[model.joints[j].coordinate] = 0.0;
+    }
+    let u = vec![0.0; model.actuated_joints().len()];
+    let f = |q: &[f64], dq: &[f64]| {
+        model
+            .forward_dynamics(q, dq, &u)
+            .expect("ddq")
+            .as_slice()
+            .to_vec()
+    };
+    let (drift, t_max) = rk4_energy_drift(&model, &q0, &dq0, &f, 5e-4, 2.0);
+    println!("flight: relative energy drift {drift:.2e}, max kinetic energy {t_max:.1} J");
+    assert!(
+        t_max > 1.0,
+        "the test must exchange energy: max kinetic energy {t_max} J"
+    );
+    assert!(drift < 1e-6, "relative energy drift {drift}");
+}
+
+#[test]
+fn energy_is_conserved_in_pinned_stance_with_zero_torque() {
+    let model = adam();
+    let legs = model.legs().expect("biped");
+    let stance = legs.side(Side::Right).foot;
+    let mut r = rng(6);
+    let q0 = random_q(&model, &mut r);
+    // Project a random velocity onto the constraint J q̇ = 0 (stance foot at rest).
+    let st = model.body_poses(&q0).expect("poses");
+    let j = model.frame_jacobian(&st, stance);
+    // Design joints stay still: zero their velocity and their Jacobian columns, then project.
+    let mut v = DVector::from_vec(random_dq(&model, &mut r, 1.0));
+    let mut j = j;
+    for jd in model.design_joints() {
+        let c = model.joints[jd].coordinate;
+        v[c] = 0.0;
+        j.column_mut(c).fill(0.0);
+    }
+    let jjt = &j * j.transpose();
+    let lam = jjt.lu().solve(&(&j * &v)).expect("regular");
+    let dq0: Vec<f64> = (v - j.transpose() * lam).as_slice().to_vec();
+    let u = vec![0.0; model.actuated_joints().len()];
+    let f = |q: &[f64], dq: &[f64]| {
+        model
+            .constrained_dynamics(q, dq, &u, &[stance])
+            .expect("ddq")
+            .ddq
+            .as_slice()
+            .to_vec()
+    };
+    // The robot falls around its pinned foot and the free leg whips (kinetic energy reaches
+    // ~175 J); RK4's error shrinks as dt⁴ (measured: 3.3e-2, 3.7e-3, 2.0e-4 at dt = 1e-3, 5e-4,
+    // 2.5e-4 s), so dt = 5e-5 s is the step that resolves this motion to 1e-6.
+    let (drift, t_max) = rk4_energy_drift(&model, &q0, &dq0, &f, 5e-5, 2.0);
+    println!("pinned stance: relative energy drift {drift:.2e}, max kinetic energy {t_max:.1} J");
+    assert!(t_max > 1.0, "max kinetic energy {t_max} J");
+    assert!(drift < 1e-6, "relative energy drift {drift}");
+}
+
+#[test]
+fn constrained_dynamics_keeps_the_stance_foot_unaccelerated() {
+    let model = adam();
+    let legs = model.legs().expect("biped");
+    let mut r = rng(7);
+    for _ in 0..20 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 2.0);
+        let u = [5.0, -3.0, 2.0, 7.0];
+        let foot = legs.left.foot;
+        let sol = model
+            .constrained_dynamics(&q, &dq, &u, &[foot])
+            .expect("ddq");
+        let st = model.body_states(&q, &dq).expect("st");
+        let jac = model.frame_jacobian(&st, foot);
+        let bias = model.frame_bias_acceleration_in(&st, foot);
+        let acc = &jac * &sol.ddq;
+        assert!((acc[0] + bias[0]).abs() < 1e-9 && (acc[1] + bias[1]).abs() < 1e-9);
+        // Newton for the whole robot: contact force + gravity = Σ m_b a_b, with each body's com
+        // acceleration J_b q̈ + J̇_b q̇ (Jacobians and bias accelerations are checked against
+        // finite differences and the Lagrangian in the tests above).
+        let f = sol.forces_n[0];
+        let mut m_a = [0.0, 0.0];
+        for (b, body) in model.bodies.iter().enumerate() {
+            let i = body.inertia;
+            let com = model.point_position(&st, b, i.com_xz_m);
+            let ja = model.point_jacobian(&st, b, com) * &sol.ddq;
+            let bias = model.point_bias_acceleration(&st, b, i.com_xz_m);
+            m_a[0] += i.mass_kg * (ja[0] + bias[0]);
+            m_a[1] += i.mass_kg * (ja[1] + bias[1]);
+        }
+        let m = model.total_mass_kg();
+        let g = model.gravity_mps2;
+        assert!(
+            (f[0] - m_a[0]).abs() < 1e-9 * m * g,
+            "Fx {} vs Σ m a {}",
+            f[0],
+            m_a[0]
+        );
+        assert!(
+            (f[1] - (m_a[1] + m * g)).abs() < 1e-9 * m * g,
+            "Fz {} vs Σ m a + m g {}",
+            f[1],
+            m_a[1] + m * g
+        );
+    }
+}
+
+#[test]
+fn dual_number_derivatives_equal_central_differences() {
+    let model = adam();
+    let legs = model.legs().expect("biped");
+    let mut r = rng(8);
+    let q = random_q(&model, &mut r);
+    let dq = random_dq(&model, &mut r, 2.0);
+    let u = [3.0, -2.0, 1.5, 4.0];
+    let h = 1e-6;
+    // Quantities as flat vectors: D, H, stance ddq and force, swing-foot position, stance angle.
+    let eval = |q: &[Dual64]| -> Vec<Dual64> {
+        let dqd: Vec<Dual64> = dq.iter().map(|&v| Dual64::from(v)).collect();
+        let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
+        let dy = model.dynamics(q, &dqd).expect("dyn");
+        let cd = model
+            .constrained_dynamics(q, &dqd, &ud, &[legs.right.foot])
+            .expect("cd");
+        let st = model.body_poses(q).expect("st");
+        let mut out: Vec<Dual64> = dy.mass_matrix.iter().copied().collect();
+        out.extend(dy.drift.iter().copied());
+        out.extend(cd.ddq.iter().copied());
+        out.extend(cd.forces_n[0]);
+        out.extend(model.frame_position_in(&st, legs.left.foot));
+        out.push(model.stance_leg_angle_in(&st, &legs, Side::Right));
+        out
+    };
+    for i in 0..model.dof() {
+        let exact: Vec<f64> = eval(&dual_at(&q, i)).iter().map(|v| v.eps).collect();
+        let shift = |s: f64| -> Vec<f64> {
+            let mut qs = q.clone();
+            qs[i] += s;
+            let qd: Vec<Dual64> = qs.iter().map(|&v| Dual64::from(v)).collect();
+            eval(&qd).iter().map(|v| v.re).collect()
+        };
+        let (p, m) = (shift(h), shift(-h));
+        let fd: Vec<f64> = p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+        // Central differences: truncation O(h²) ≈ 1e-12 and rounding ≈ 1e-16·|f|/h ≈ 1e-10·|f|.
+        let err = rel_diff(&exact, &fd);
+        assert!(
+            err < 1e-6,
+            "∂/∂q_{i}: dual vs finite differences differ by {err} (relative)"
+        );
+    }
+}
+
+#[test]
+fn stance_leg_angle_rate_matches_dual_numbers() {
+    let model = adam();
+    let legs = model.legs().expect("biped");
+    let mut r = rng(9);
+    for _ in 0..20 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 2.0);
+        let qd: Vec<Dual64> = q
+            .iter()
+            .zip(&dq)
+            .map(|(&a, &b)| Dual64::new(a, b))
+            .collect();
+        let theta = model.stance_leg_angle(&qd, &legs, Side::Left).expect("θ");
+        let (t, rate) = model
+            .stance_leg_angle_rate(&q, &dq, &legs, Side::Left)
+            .expect("θ̇");
+        assert!((theta.re - t).abs() < 1e-15);
+        assert!((theta.eps - rate).abs() < 1e-12 * rate.abs().max(1.0));
+    }
+}

@@ -1,0 +1,129 @@
+//! The gait file: round trip and validation errors that name field and value.
+
+use model::design::DesignLengths;
+use model::gait::*;
+use model::{ModelError, Side};
+
+fn sample() -> GaitFile {
+    GaitFile {
+        schema_version: GAIT_SCHEMA_VERSION,
+        robot: RobotReference {
+            name: "adam_planar".into(),
+            urdf: "../robots/adam_planar.urdf".into(),
+            sha256: sha256_hex("<robot/>"),
+        },
+        design: DesignLengths::ADAM,
+        outputs: OutputDefinition::adam(),
+        bezier: BezierSpec {
+            degree: 5,
+            alpha: vec![vec![0.1, 0.2, 0.3, 0.2, 0.1, 0.0]; 4],
+        },
+        phase: PhaseDefinition::StateBased {
+            theta_plus_rad: -0.2,
+            theta_minus_rad: 0.2,
+        },
+        stance_leg: Side::Right,
+        step_duration_s: 0.8,
+        step_length_m: 0.23,
+        speed_mps: 0.2875,
+        cost_of_transport: 0.2,
+        initial_state: Some(RobotState {
+            q: vec![0.0; 11],
+            dq: vec![0.0; 11],
+        }),
+        solver: SolverSummary {
+            solver: "test".into(),
+            status: "optimal".into(),
+            iterations: 1,
+            solve_time_s: 0.1,
+            objective: 0.2,
+            constraint_violation: 1e-9,
+        },
+    }
+}
+
+fn reject(gait: &GaitFile) -> String {
+    let text = serde_json::to_string(gait).expect("serializes");
+    GaitFile::from_json(&text, "g.json")
+        .expect_err("must be rejected")
+        .to_string()
+}
+
+#[test]
+fn round_trips_through_a_file() {
+    let dir = std::env::temp_dir().join(format!("adam-gait-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let path = dir.join("g.json");
+    let g = sample();
+    g.save(&path).expect("saves");
+    assert_eq!(GaitFile::load(&path).expect("loads"), g);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn validation_names_field_and_value() {
+    let mut g = sample();
+    g.bezier.alpha[2][3] = f64::NAN;
+    // JSON has no NaN: serde_json writes null, which is a parse error naming the position.
+    let text = serde_json::to_string(&g).expect("serializes");
+    assert!(GaitFile::from_json(&text, "g.json").is_err());
+    assert!(g
+        .validate("g.json")
+        .expect_err("nan")
+        .to_string()
+        .contains("bezier.alpha[2][3]"));
+
+    let mut g = sample();
+    g.bezier.alpha[1].pop();
+    let e = reject(&g);
+    assert!(
+        e.contains("g.json") && e.contains("bezier.alpha[1]") && e.contains("5 coefficients"),
+        "{e}"
+    );
+
+    let mut g = sample();
+    g.bezier.alpha.pop();
+    assert!(reject(&g).contains("bezier.alpha"));
+
+    let mut g = sample();
+    g.phase = PhaseDefinition::StateBased {
+        theta_plus_rad: 0.2,
+        theta_minus_rad: 0.2,
+    };
+    let e = reject(&g);
+    assert!(
+        e.contains("phase.theta_minus_rad") && e.contains("0.2"),
+        "{e}"
+    );
+
+    let mut g = sample();
+    g.step_duration_s = -1.0;
+    assert!(reject(&g).contains("step_duration_s"));
+
+    let mut g = sample();
+    g.robot.sha256 = "xyz".into();
+    assert!(reject(&g).contains("robot.sha256"));
+}
+
+#[test]
+fn unknown_versions_and_unknown_fields_are_refused() {
+    let mut v: serde_json::Value = serde_json::to_value(sample()).expect("value");
+    v["schema_version"] = serde_json::json!(2);
+    let e = GaitFile::from_json(&v.to_string(), "g.json").expect_err("version");
+    assert!(
+        matches!(&e, ModelError::InvalidField { field, value, .. } if field == "schema_version" && value == "2"),
+        "{e}"
+    );
+    let mut v: serde_json::Value = serde_json::to_value(sample()).expect("value");
+    v["surprise"] = serde_json::json!(1);
+    let e = GaitFile::from_json(&v.to_string(), "g.json").expect_err("unknown field");
+    assert!(e.to_string().contains("surprise"), "{e}");
+}
+
+#[test]
+fn output_joint_names_follow_the_stance_leg() {
+    let outs = OutputDefinition::adam();
+    assert_eq!(outs[0].joint_name(Side::Right), "right_hip_pitch");
+    assert_eq!(outs[3].joint_name(Side::Right), "left_knee_pitch");
+    assert_eq!(outs[3].joint_name(Side::Left), "right_knee_pitch");
+}

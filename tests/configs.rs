@@ -1,0 +1,46 @@
+//! Every file under `configs/` loads and validates with the loader its extension names.
+
+use std::path::{Path, PathBuf};
+
+fn files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).expect("configs/ is readable") {
+        let path = entry.expect("entry").path();
+        if path.is_dir() {
+            files(&path, out);
+        } else {
+            out.push(path);
+        }
+    }
+}
+
+#[test]
+fn every_config_file_loads_and_validates() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs");
+    let mut all = Vec::new();
+    files(&root, &mut all);
+    all.sort();
+    let mut checked = 0;
+    for path in &all {
+        match path.extension().and_then(|e| e.to_str()) {
+            Some("md") => continue,
+            Some("urdf") => {
+                let m = model::PlanarModel::from_urdf_file(path).unwrap_or_else(|e| panic!("{e}"));
+                m.legs()
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            }
+            Some("json") => {
+                model::gait::GaitFile::load(path).unwrap_or_else(|e| panic!("{e}"));
+            }
+            _ => panic!(
+                "{}: no loader for this kind of file; add one to this test",
+                path.display()
+            ),
+        }
+        checked += 1;
+    }
+    assert!(
+        checked >= 1,
+        "no config files found under {}",
+        root.display()
+    );
+}
