@@ -138,6 +138,86 @@ impl PlanarModel {
         })
     }
 
+    /// Inverse dynamics `D(q) q̈ + H(q, q̇)` by one forward recursion of body accelerations and a
+    /// projection of each body's Newton–Euler force through its Jacobian: O(bodies × depth) and
+    /// no mass matrix, which is what the planner differentiates at every collocation point.
+    pub fn inverse_dynamics<S: Real>(&self, q: &[S], dq: &[S], ddq: &[S]) -> Result<DVector<S>> {
+        self.inverse_dynamics_with(&self.inertias(), q, dq, ddq)
+    }
+
+    /// [`Self::inverse_dynamics`] with the given mass properties (one per body).
+    pub fn inverse_dynamics_with<S: Real>(
+        &self,
+        inertias: &[BodyInertia<S>],
+        q: &[S],
+        dq: &[S],
+        ddq: &[S],
+    ) -> Result<DVector<S>> {
+        if ddq.len() != self.dof() {
+            return Err(ModelError::Dimension {
+                what: "ddq",
+                expected: self.dof(),
+                found: ddq.len(),
+            });
+        }
+        let st = self.body_states(q, dq)?;
+        let n = self.dof();
+        let z = S::zero();
+        let g = S::from(self.gravity_mps2);
+        // Angular accelerations are linear in q̈ (no planar bias).
+        let mut alpha = [z; crate::robot::MAX_BODIES];
+        alpha[0] = ddq[2];
+        for (b, body) in self.bodies.iter().enumerate().skip(1) {
+            let (Some(p), Some(j)) = (body.parent, body.joint) else {
+                continue;
+            };
+            alpha[b] = alpha[p];
+            if let crate::robot::JointKind::Revolute { axis_sign } = self.joints[j].kind {
+                alpha[b] += ddq[self.joints[j].coordinate] * axis_sign;
+            }
+        }
+        let mut out = DVector::from_element(n, z);
+        for (b, inertia) in inertias.iter().enumerate() {
+            if inertia.mass_kg.re() == 0.0 && inertia.inertia_yy_kgm2.re() == 0.0 {
+                continue;
+            }
+            let com = self.point_position(&st, b, inertia.com_xz_m);
+            let bias = self.point_bias_acceleration(&st, b, inertia.com_xz_m);
+            // a = J q̈ + J̇ q̇, then f = m (a + g ẑ); generalized force Jᵀ f + J_θᵀ I θ̈.
+            let mut a = bias;
+            let mut cols = [(0usize, z, z); crate::robot::MAX_DOF];
+            let mut nc = 0;
+            self.point_jacobian_into(&st, b, com, |r, c, v| {
+                if let Some(e) = cols[..nc].iter_mut().find(|e| e.0 == c) {
+                    if r == 0 {
+                        e.1 = v
+                    } else {
+                        e.2 = v
+                    }
+                } else {
+                    cols[nc] = if r == 0 { (c, v, z) } else { (c, z, v) };
+                    nc += 1;
+                }
+            });
+            for &(c, jx, jz) in &cols[..nc] {
+                a[0] += jx * ddq[c];
+                a[1] += jz * ddq[c];
+            }
+            let f = [inertia.mass_kg * a[0], inertia.mass_kg * (a[1] + g)];
+            for &(c, jx, jz) in &cols[..nc] {
+                out[c] += jx * f[0] + jz * f[1];
+            }
+            let torque = inertia.inertia_yy_kgm2 * alpha[b];
+            out[2] += torque;
+            for &j in &self.bodies[b].joint_path {
+                if let crate::robot::JointKind::Revolute { axis_sign } = self.joints[j].kind {
+                    out[self.joints[j].coordinate] += torque * axis_sign;
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// Kinetic energy ½ Σ (m |v_com|² + I ω²) from the velocity recursion (independent of D), J.
     pub fn kinetic_energy<S: Real>(&self, q: &[S], dq: &[S]) -> Result<S> {
         let st = self.body_states(q, dq)?;

@@ -49,6 +49,66 @@ impl PlanarModel {
     }
 }
 
+/// θ, θ̇ and θ̈ of the stance-leg angle along (q, q̇, q̈), rad, rad/s, rad/s².
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AngleDerivatives<S> {
+    /// θ, rad.
+    pub theta: S,
+    /// θ̇, rad/s.
+    pub rate: S,
+    /// θ̈, rad/s².
+    pub accel: S,
+}
+
+impl PlanarModel {
+    /// θ, θ̇ and θ̈ of the stance-leg angle, for the planner's output dynamics. Never allocates.
+    pub fn stance_leg_angle_derivatives<S: Real>(
+        &self,
+        q: &[S],
+        dq: &[S],
+        ddq: &[S],
+        legs: &Legs,
+        stance: Side,
+    ) -> Result<AngleDerivatives<S>> {
+        let st = self.body_states(q, dq)?;
+        let leg = legs.side(stance);
+        let hip_body = self.joints[leg.hip].body;
+        let foot = self.frame_position_in(&st, leg.foot);
+        let hip = st.pose[hip_body].xz_m;
+        let acc = |body: usize, p: [S; 2], bias: [S; 2]| {
+            let mut a = bias;
+            self.point_jacobian_into(&st, body, p, |r, c, v| a[r] += v * ddq[c]);
+            a
+        };
+        let a_hip = acc(hip_body, hip, st.bias_acc_xz[hip_body]);
+        let a_foot = acc(
+            self.frames[leg.foot].body,
+            foot,
+            self.frame_bias_acceleration_in(&st, leg.foot),
+        );
+        let v_hip = st.vel_xz[hip_body];
+        let v_foot = self.frame_velocity_in(&st, leg.foot);
+        let r = [hip[0] - foot[0], hip[1] - foot[1]];
+        let v = [v_hip[0] - v_foot[0], v_hip[1] - v_foot[1]];
+        let a = [a_hip[0] - a_foot[0], a_hip[1] - a_foot[1]];
+        let rho2 = r[0] * r[0] + r[1] * r[1];
+        let rate = (r[1] * v[0] - r[0] * v[1]) / rho2;
+        let accel =
+            (r[1] * a[0] - r[0] * a[1]) / rho2 - rate * (r[0] * v[0] + r[1] * v[1]) * 2.0 / rho2;
+        Ok(AngleDerivatives {
+            theta: r[0].atan2(r[1]),
+            rate,
+            accel,
+        })
+    }
+
+    /// Height of the swing foot above the ground (z = 0), z_nsf(q), m. Never allocates.
+    pub fn swing_foot_height<S: Real>(&self, q: &[S], legs: &Legs, swing: Side) -> Result<S> {
+        let st = self.body_poses(q)?;
+        Ok(self.frame_position_in(&st, legs.side(swing).foot)[1])
+    }
+}
+
 /// State-based phase τ = (θ − θ⁺) / (θ⁻ − θ⁺).
 #[inline]
 pub fn state_phase<S: Real>(theta_rad: S, theta_plus_rad: f64, theta_minus_rad: f64) -> S {

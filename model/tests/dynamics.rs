@@ -339,3 +339,56 @@ fn stance_leg_angle_rate_matches_dual_numbers() {
         assert!((theta.eps - rate).abs() < 1e-12 * rate.abs().max(1.0));
     }
 }
+
+#[test]
+fn inverse_dynamics_equals_mass_matrix_times_acceleration_plus_drift() {
+    let model = adam();
+    let mut r = rng(10);
+    for _ in 0..50 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 3.0);
+        let ddq = random_dq(&model, &mut r, 20.0);
+        let dy = model.dynamics(&q, &dq).expect("dyn");
+        let expected = &dy.mass_matrix * DVector::from_column_slice(&ddq) + &dy.drift;
+        let id = model.inverse_dynamics(&q, &dq, &ddq).expect("id");
+        let err = rel_diff(id.as_slice(), expected.as_slice());
+        assert!(
+            err < 1e-13,
+            "inverse dynamics differs from D q̈ + H by {err} (relative)"
+        );
+    }
+}
+
+#[test]
+fn stance_leg_angle_acceleration_matches_second_order_dual_numbers() {
+    use model::num_dual::Dual2_64;
+    let model = adam();
+    let legs = model.legs().expect("biped");
+    let mut r = rng(11);
+    for _ in 0..20 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 2.0);
+        let ddq = random_dq(&model, &mut r, 10.0);
+        // θ(q + s q̇ + ½ s² q̈): first and second derivative at s = 0 are θ̇ and θ̈.
+        let qs: Vec<Dual2_64> = (0..q.len())
+            .map(|i| Dual2_64::new(q[i], dq[i], ddq[i]))
+            .collect();
+        let th = model.stance_leg_angle(&qs, &legs, Side::Right).expect("θ");
+        let d = model
+            .stance_leg_angle_derivatives(&q, &dq, &ddq, &legs, Side::Right)
+            .expect("derivatives");
+        assert!((d.theta - th.re).abs() < 1e-14);
+        assert!(
+            (d.rate - th.v1).abs() < 1e-12 * th.v1.abs().max(1.0),
+            "{} vs {}",
+            d.rate,
+            th.v1
+        );
+        assert!(
+            (d.accel - th.v2).abs() < 1e-11 * th.v2.abs().max(1.0),
+            "{} vs {}",
+            d.accel,
+            th.v2
+        );
+    }
+}
