@@ -1,0 +1,484 @@
+//! The solver side of the NLP interface: options, results, backends.
+
+use std::time::Duration;
+
+use super::problem::NlpProblem;
+use super::ripopt_backend::RipoptSolver;
+use super::validate::validate_problem;
+
+/// Errors that stop a solve before it starts (the problem or options are malformed).
+///
+/// A solve that runs and does not converge is not an error: it returns a
+/// [`Solution`] whose [`Solution::status`] says why it stopped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum NlpError {
+    /// A bound is NaN, or a lower bound exceeds its upper bound.
+    #[error("{kind} bound {index} is invalid: lower {lower}, upper {upper}")]
+    InvalidBounds {
+        /// "variable" or "constraint".
+        kind: &'static str,
+        /// Index of the offending variable or constraint.
+        index: usize,
+        /// The lower bound given.
+        lower: f64,
+        /// The upper bound given.
+        upper: f64,
+    },
+    /// A sparsity pattern has an entry outside the matrix, or rows and cols differ in length.
+    #[error(
+        "{matrix} pattern entry {entry} at ({row}, {col}) is outside a {n_rows}×{n_cols} matrix"
+    )]
+    PatternOutOfRange {
+        /// "jacobian" or "hessian".
+        matrix: &'static str,
+        /// Index of the entry in the triplet list.
+        entry: usize,
+        /// Its row.
+        row: usize,
+        /// Its column.
+        col: usize,
+        /// Rows of the matrix.
+        n_rows: usize,
+        /// Columns of the matrix.
+        n_cols: usize,
+    },
+    /// The two index vectors of a sparsity pattern differ in length.
+    #[error("{matrix} pattern has {rows} row indices but {cols} column indices")]
+    PatternLengthMismatch {
+        /// "jacobian" or "hessian".
+        matrix: &'static str,
+        /// Length of `rows`.
+        rows: usize,
+        /// Length of `cols`.
+        cols: usize,
+    },
+    /// A Hessian pattern entry lies above the diagonal.
+    #[error("hessian pattern entry {entry} at ({row}, {col}) is in the upper triangle")]
+    HessianNotLowerTriangular {
+        /// Index of the entry in the triplet list.
+        entry: usize,
+        /// Its row.
+        row: usize,
+        /// Its column.
+        col: usize,
+    },
+    /// The initial point contains NaN or infinity.
+    #[error("initial point entry {index} is not finite: {value}")]
+    NonFiniteInitialPoint {
+        /// Index of the offending entry.
+        index: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// A warm-start vector has the wrong length.
+    #[error("warm start {field} has length {actual}, expected {expected}")]
+    WarmStartLength {
+        /// Which vector.
+        field: &'static str,
+        /// Expected length.
+        expected: usize,
+        /// Length given.
+        actual: usize,
+    },
+    /// An option is out of range.
+    #[error("option {name} = {value} is out of range ({reason})")]
+    InvalidOption {
+        /// Option name.
+        name: &'static str,
+        /// Value given.
+        value: f64,
+        /// What is allowed.
+        reason: &'static str,
+    },
+}
+
+/// Result alias of this module.
+pub type Result<T, E = NlpError> = std::result::Result<T, E>;
+
+/// Why a solve stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SolveStatus {
+    /// The KKT conditions hold to the requested tolerance.
+    Optimal,
+    /// The KKT conditions hold to the relaxed "acceptable" tolerances.
+    Acceptable,
+    /// The constraints appear (locally) infeasible.
+    Infeasible,
+    /// The iteration limit was reached.
+    IterationLimit,
+    /// The wall-time limit was reached.
+    TimeLimit,
+    /// The iterates grew without bound (an unbounded problem?).
+    Diverging,
+    /// The feasibility restoration phase failed.
+    RestorationFailed,
+    /// The search direction became too small to make progress.
+    TinyStep,
+    /// The problem functions could not be evaluated at an accepted iterate.
+    EvaluationError,
+    /// The iteration callback asked to stop.
+    UserStop,
+    /// Numerical trouble in the linear algebra, or an internal backend error.
+    NumericalError,
+}
+
+impl SolveStatus {
+    /// True for [`SolveStatus::Optimal`] and [`SolveStatus::Acceptable`].
+    pub fn is_success(self) -> bool {
+        matches!(self, Self::Optimal | Self::Acceptable)
+    }
+}
+
+/// Multipliers (and optionally a primal point) to start a solve from, e.g.
+/// the [`Solution`] of a neighbouring problem. See [`Solution::warm_start`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct WarmStart {
+    /// Primal start; `None` keeps [`NlpProblem::initial_point`].
+    pub x: Option<Vec<f64>>,
+    /// Constraint multipliers λ, length `m`.
+    pub constraint_multipliers: Vec<f64>,
+    /// Lower-bound multipliers z_l ≥ 0, length `n`.
+    pub lower_bound_multipliers: Vec<f64>,
+    /// Upper-bound multipliers z_u ≥ 0, length `n`.
+    pub upper_bound_multipliers: Vec<f64>,
+}
+
+/// What the iteration callback sees once per iteration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IterationReport {
+    /// Iteration number, 0 for the initial point.
+    pub iteration: usize,
+    /// Objective at the current iterate (in the backend's scaling).
+    pub objective: f64,
+    /// Constraint violation (max norm).
+    pub primal_infeasibility: f64,
+    /// Dual infeasibility (max norm of the Lagrangian gradient).
+    pub dual_infeasibility: f64,
+    /// Barrier parameter μ.
+    pub barrier_parameter: f64,
+    /// Max norm of the primal step.
+    pub step_norm: f64,
+    /// True while the backend is in its feasibility-restoration phase.
+    pub restoration: bool,
+}
+
+/// What the iteration callback tells the solver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IterationControl {
+    /// Keep iterating.
+    Continue,
+    /// Stop now; the solve returns [`SolveStatus::UserStop`].
+    Stop,
+}
+
+/// The available solver backends.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Backend {
+    /// `ripopt` 0.8: a pure-Rust IPOPT-class primal–dual interior point
+    /// method (filter line search, sparse LDLᵀ with inertia correction). EPL-2.0.
+    #[default]
+    Ripopt,
+}
+
+/// Options common to every backend.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolveOptions {
+    /// Which backend to use.
+    pub backend: Backend,
+    /// Overall KKT tolerance (scaled, as IPOPT's `tol`).
+    pub tolerance: f64,
+    /// Absolute tolerance on the constraint violation (IPOPT's `constr_viol_tol`).
+    pub constraint_violation_tolerance: f64,
+    /// Iteration limit.
+    pub max_iterations: usize,
+    /// Wall-time limit; `None` for none.
+    pub max_wall_time: Option<Duration>,
+    /// Backend console output: 0 silent, 5 one line per iteration, higher is chattier.
+    pub print_level: u8,
+    /// Start from these multipliers (and point); `None` for a cold start.
+    pub warm_start: Option<WarmStart>,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        Self {
+            backend: Backend::default(),
+            tolerance: 1e-8,
+            constraint_violation_tolerance: 1e-4,
+            max_iterations: 3000,
+            max_wall_time: None,
+            print_level: 0,
+            warm_start: None,
+        }
+    }
+}
+
+/// Counters and timings of one solve.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveStatistics {
+    /// Iterations of the backend (restoration iterations included).
+    pub iterations: usize,
+    /// Final objective `f(x)`, unscaled.
+    pub objective: f64,
+    /// Final constraint violation (max norm, unscaled, bounds included).
+    pub primal_infeasibility: f64,
+    /// Final dual infeasibility as reported by the backend.
+    pub dual_infeasibility: f64,
+    /// Calls of `objective`, `gradient`, `constraints`, `jacobian_values`, `hessian_values`.
+    pub evaluation_counts: EvaluationCounts,
+    /// Wall time spent inside the problem's functions.
+    pub evaluation_time: Duration,
+    /// Wall time spent in the backend itself (total minus evaluation).
+    pub solver_time: Duration,
+    /// Wall time of the whole solve.
+    pub total_time: Duration,
+}
+
+/// How often each problem function was called.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EvaluationCounts {
+    /// `objective` calls.
+    pub objective: usize,
+    /// `gradient` calls.
+    pub gradient: usize,
+    /// `constraints` calls.
+    pub constraints: usize,
+    /// `jacobian_values` calls.
+    pub jacobian: usize,
+    /// `hessian_values` calls.
+    pub hessian: usize,
+}
+
+/// The outcome of a solve: the last iterate, its multipliers and how it ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Solution {
+    /// Why the solve stopped; check [`SolveStatus::is_success`].
+    pub status: SolveStatus,
+    /// Final primal point.
+    pub x: Vec<f64>,
+    /// Constraint values `g(x)`.
+    pub constraint_values: Vec<f64>,
+    /// Constraint multipliers λ (Lagrangian `f + λᵀg`).
+    pub constraint_multipliers: Vec<f64>,
+    /// Lower-bound multipliers z_l ≥ 0.
+    pub lower_bound_multipliers: Vec<f64>,
+    /// Upper-bound multipliers z_u ≥ 0.
+    pub upper_bound_multipliers: Vec<f64>,
+    /// Counters and timings.
+    pub statistics: SolveStatistics,
+}
+
+impl Solution {
+    /// A warm start from this solution: its point and all its multipliers.
+    pub fn warm_start(&self) -> WarmStart {
+        WarmStart {
+            x: Some(self.x.clone()),
+            constraint_multipliers: self.constraint_multipliers.clone(),
+            lower_bound_multipliers: self.lower_bound_multipliers.clone(),
+            upper_bound_multipliers: self.upper_bound_multipliers.clone(),
+        }
+    }
+}
+
+/// A swappable NLP backend.
+pub trait NlpSolver {
+    /// Solves `problem`, calling `on_iteration` once per iteration.
+    fn solve_with_callback(
+        &self,
+        problem: &dyn NlpProblem,
+        options: &SolveOptions,
+        on_iteration: &mut dyn FnMut(&IterationReport) -> IterationControl,
+    ) -> Result<Solution>;
+}
+
+/// Solves `problem` with the backend named in `options`.
+///
+/// Fails only when the problem or options are malformed; see [`Solution::status`]
+/// for how the iteration ended.
+pub fn solve(problem: &dyn NlpProblem, options: &SolveOptions) -> Result<Solution> {
+    solve_with_callback(problem, options, &mut |_| IterationControl::Continue)
+}
+
+/// Like [`solve`], calling `on_iteration` once per iteration (live progress, early stop).
+pub fn solve_with_callback(
+    problem: &dyn NlpProblem,
+    options: &SolveOptions,
+    on_iteration: &mut dyn FnMut(&IterationReport) -> IterationControl,
+) -> Result<Solution> {
+    validate_options(options)?;
+    validate_problem(problem, options.warm_start.as_ref())?;
+    match options.backend {
+        Backend::Ripopt => RipoptSolver.solve_with_callback(problem, options, on_iteration),
+    }
+}
+
+fn validate_options(options: &SolveOptions) -> Result<()> {
+    for (name, value) in [
+        ("tolerance", options.tolerance),
+        (
+            "constraint_violation_tolerance",
+            options.constraint_violation_tolerance,
+        ),
+    ] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(NlpError::InvalidOption {
+                name,
+                value,
+                reason: "must be finite and positive",
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use num_dual::DualNum;
+
+    use super::*;
+    use crate::nlp::ad::{AdModel, DenseAdProblem};
+
+    /// Hock–Schittkowski 71: f* = 17.0140173 at (1, 4.743, 3.8211, 1.3794).
+    struct Hs71 {
+        lower_bound: f64,
+    }
+
+    impl AdModel for Hs71 {
+        fn num_variables(&self) -> usize {
+            4
+        }
+        fn num_constraints(&self) -> usize {
+            2
+        }
+        fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+            lower.fill(self.lower_bound);
+            upper.fill(5.0);
+        }
+        fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+            lower.copy_from_slice(&[25.0, 40.0]);
+            upper.copy_from_slice(&[f64::INFINITY, 40.0]);
+        }
+        fn initial_point(&self, x0: &mut [f64]) {
+            x0.copy_from_slice(&[1.0, 5.0, 5.0, 1.0]);
+        }
+        fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
+            x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2]
+        }
+        fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
+            g[0] = x[0] * x[1] * x[2] * x[3];
+            g[1] = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3];
+        }
+    }
+
+    fn hs71() -> DenseAdProblem<Hs71> {
+        DenseAdProblem::new(Hs71 { lower_bound: 1.0 })
+    }
+
+    #[test]
+    fn solves_hs71_and_reports_consistent_statistics() {
+        let solution = solve(&hs71(), &SolveOptions::default()).unwrap();
+        assert_eq!(solution.status, SolveStatus::Optimal);
+        let stats = solution.statistics;
+        assert!((stats.objective - 17.014_017_3).abs() < 1e-6, "{stats:?}");
+        // Like IPOPT, ripopt relaxes bounds by 1e-8 relative (`bound_relax_factor`).
+        assert!(stats.primal_infeasibility < 1e-6, "{stats:?}");
+        // The product constraint is active (λ ≠ 0), the norm constraint too.
+        assert!((solution.constraint_values[0] - 25.0).abs() < 1e-6);
+        assert!((solution.constraint_values[1] - 40.0).abs() < 1e-6);
+        assert!(stats.evaluation_counts.hessian >= stats.iterations.saturating_sub(1));
+        assert!(stats.evaluation_time <= stats.total_time);
+        assert_eq!(stats.evaluation_time + stats.solver_time, stats.total_time);
+    }
+
+    #[test]
+    fn callback_sees_every_iteration_and_can_stop_the_solve() {
+        let mut seen = Vec::new();
+        let solution = solve_with_callback(&hs71(), &SolveOptions::default(), &mut |report| {
+            seen.push(*report);
+            IterationControl::Continue
+        })
+        .unwrap();
+        assert!(!seen.is_empty());
+        assert_eq!(seen[0].iteration, 0);
+        let last = seen.last().unwrap();
+        assert_eq!(last.iteration, solution.statistics.iterations);
+        assert!(last.primal_infeasibility < 1e-6);
+
+        let mut calls = 0;
+        let stopped = solve_with_callback(&hs71(), &SolveOptions::default(), &mut |_| {
+            calls += 1;
+            if calls >= 2 {
+                IterationControl::Stop
+            } else {
+                IterationControl::Continue
+            }
+        })
+        .unwrap();
+        assert_eq!(stopped.status, SolveStatus::UserStop);
+        assert!(stopped.statistics.iterations < solution.statistics.iterations);
+    }
+
+    #[test]
+    fn warm_start_from_the_optimum_needs_fewer_iterations() {
+        let cold = solve(&hs71(), &SolveOptions::default()).unwrap();
+        let options = SolveOptions {
+            warm_start: Some(cold.warm_start()),
+            ..SolveOptions::default()
+        };
+        let warm = solve(&hs71(), &options).unwrap();
+        assert_eq!(warm.status, SolveStatus::Optimal);
+        assert!(
+            warm.statistics.iterations < cold.statistics.iterations,
+            "warm {} vs cold {}",
+            warm.statistics.iterations,
+            cold.statistics.iterations
+        );
+        assert!((warm.statistics.objective - cold.statistics.objective).abs() < 1e-7);
+    }
+
+    #[test]
+    fn malformed_input_is_rejected_with_a_typed_error() {
+        let crossed = DenseAdProblem::new(Hs71 { lower_bound: 6.0 });
+        assert_eq!(
+            solve(&crossed, &SolveOptions::default()),
+            Err(NlpError::InvalidBounds {
+                kind: "variable",
+                index: 0,
+                lower: 6.0,
+                upper: 5.0
+            })
+        );
+        let short_start = SolveOptions {
+            warm_start: Some(WarmStart {
+                x: None,
+                constraint_multipliers: vec![0.0; 1],
+                lower_bound_multipliers: vec![0.0; 4],
+                upper_bound_multipliers: vec![0.0; 4],
+            }),
+            ..SolveOptions::default()
+        };
+        assert_eq!(
+            solve(&hs71(), &short_start),
+            Err(NlpError::WarmStartLength {
+                field: "constraint_multipliers",
+                expected: 2,
+                actual: 1
+            })
+        );
+        let bad_tolerance = SolveOptions {
+            tolerance: 0.0,
+            ..SolveOptions::default()
+        };
+        assert!(matches!(
+            solve(&hs71(), &bad_tolerance),
+            Err(NlpError::InvalidOption {
+                name: "tolerance",
+                ..
+            })
+        ));
+    }
+}
