@@ -1,7 +1,9 @@
 //! # planner: offline HZD gait optimization and co-design for ADAM
 //!
-//! Stands on [`model`]. Work in progress: the NLP layer (`planner::nlp`) and the
-//! collocation problem (`planner::collocation`) arrive with the "Planner I" issue, the
-//! co-design of thigh and shin lengths with "Planner II". Nothing here is usable yet.
+//! Stands on [`model`]. Available now: [`nlp`], the nonlinear-programming layer
+//! (our `NlpProblem`/`NlpSolver` traits, the pure-Rust interior-point backend,
+//! AD helpers and a derivative checker). The collocation problem
+//! (`planner::collocation`) arrives with the "Planner I" issue, the co-design of
+//! thigh and shin lengths with "Planner II".
 
 pub mod nlp;

@@ -26,15 +26,15 @@ const INF: f64 = f64::INFINITY;
 /// Problems that do not meet the pass criterion, with the reason. The test
 /// also fails if one of them starts passing, so this list stays true.
 ///
-/// Four reach a different local minimum from the standard start (a KKT point,
-/// reported Optimal; the published value is the global one); two are
-/// degenerate; one beats its published value.
+/// Cross-checked with IPOPT 3.14 + MUMPS (CasADi, same formulation and start):
+/// IPOPT ends at the same points on HS2, HS13, HS20 and HS44; HS16 is a real
+/// ripopt weakness (IPOPT reaches 0.25).
 const KNOWN_FAILURES: &[(&str, &str)] = &[
-    ("HS2", "local minimum f = 4.9412 at x1 ≈ -1.22 from the standard start"),
-    ("HS13", "degenerate: no constraint qualification at x* = (1, 0); stops at f = 0.994"),
-    ("HS16", "local minimum f = 23.14 from the standard start (the bound-infeasible x0 is pushed the other way)"),
-    ("HS20", "local minimum f = 40.199 at x = (-0.5, √3/2), mirror of the global one"),
-    ("HS44", "nonconvex bilinear: local minimum f = -13 at another vertex"),
+    ("HS2", "local minimum f = 4.9412 at x1 ≈ -1.22 from the standard start (IPOPT: same)"),
+    ("HS13", "degenerate: no constraint qualification at x* = (1, 0); stops at f = 0.994 (IPOPT: 0.9946)"),
+    ("HS16", "ripopt ends at the local minimum f = 23.14; IPOPT reaches 0.25 from the same start"),
+    ("HS20", "local minimum f = 40.199 at x = (-0.5, √3/2), mirror of the global one (IPOPT: same)"),
+    ("HS44", "nonconvex bilinear: local minimum f = -13 at another vertex (IPOPT: same)"),
     ("HS108", "degenerate (dependent active constraints at the hexagon): Acceptable at f = -0.675"),
     ("HS116", "reaches 97.58747, below the published 97.588409 and feasible to 1e-8: a better point"),
 ];

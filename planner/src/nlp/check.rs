@@ -131,3 +131,75 @@ pub fn check_derivatives(
     }
     Ok(report)
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+
+    use super::*;
+    use crate::nlp::SparsityPattern;
+
+    /// f = x0² x1 with a deliberately wrong Hessian entry and a Jacobian
+    /// pattern missing ∂g/∂x1 of g = x0 + x1³.
+    struct Faulty;
+
+    impl NlpProblem for Faulty {
+        fn num_variables(&self) -> usize {
+            2
+        }
+        fn num_constraints(&self) -> usize {
+            1
+        }
+        fn variable_bounds(&self, _: &mut [f64], _: &mut [f64]) {}
+        fn constraint_bounds(&self, _: &mut [f64], _: &mut [f64]) {}
+        fn initial_point(&self, _: &mut [f64]) {}
+        fn objective(&self, x: &[f64]) -> Result<f64, DomainError> {
+            Ok(x[0] * x[0] * x[1])
+        }
+        fn gradient(&self, x: &[f64], g: &mut [f64]) -> Result<(), DomainError> {
+            g[0] = 2.0 * x[0] * x[1];
+            g[1] = x[0] * x[0];
+            Ok(())
+        }
+        fn constraints(&self, x: &[f64], g: &mut [f64]) -> Result<(), DomainError> {
+            g[0] = x[0] + x[1].powi(3);
+            Ok(())
+        }
+        fn jacobian_structure(&self) -> SparsityPattern {
+            SparsityPattern {
+                rows: vec![0],
+                cols: vec![0],
+            }
+        }
+        fn jacobian_values(&self, _: &[f64], v: &mut [f64]) -> Result<(), DomainError> {
+            v[0] = 1.0;
+            Ok(())
+        }
+        fn hessian_structure(&self) -> SparsityPattern {
+            SparsityPattern::dense_lower_triangle(2)
+        }
+        fn hessian_values(
+            &self,
+            x: &[f64],
+            sigma: f64,
+            _: &[f64],
+            v: &mut [f64],
+        ) -> Result<(), DomainError> {
+            v[0] = sigma * 2.0 * x[1];
+            v[1] = sigma * 3.0 * x[0]; // should be 2·x0
+            v[2] = 0.0;
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn wrong_derivatives_and_missing_pattern_entries_are_reported() {
+        let report = check_derivatives(&Faulty, &[1.5, 2.0], 1.0, &[0.0]).unwrap();
+        assert!(report.max_gradient_error < 1e-8, "{report:?}");
+        // Hessian (1,0) is 4.5 instead of 3.0: error 1.5 / 3.0 = 0.5.
+        assert!((report.max_hessian_error - 0.5).abs() < 1e-6, "{report:?}");
+        // ∂g/∂x1 = 3·x1² = 12 is missing from the pattern.
+        assert_eq!(report.jacobian_entries_outside_pattern, 1);
+        assert!(report.max_jacobian_error > 0.9, "{report:?}");
+    }
+}

@@ -1,6 +1,85 @@
 //! # planner::nlp — nonlinear programming behind our own trait
 //!
-//! (full documentation written below)
+//! The collocation and co-design layers state their problem once as an
+//! [`NlpProblem`] (bounds, `f`, `∇f`, `g`, sparse Jacobian, sparse lower-triangle
+//! Lagrangian Hessian) and call [`solve`]; the backend behind it can be swapped
+//! through [`SolveOptions::backend`] or by implementing [`NlpSolver`].
+//!
+//! ```text
+//! NlpProblem ──validate──▶ backend adapter ──▶ ripopt IPM ──▶ Solution
+//!   (ours)                 (times evaluations,                (x, λ, z_l, z_u, status,
+//!                           relays iteration callback)          iterations, timings)
+//! ```
+//!
+//! * [`ad`]: write a small problem once, generic over a dual-number scalar
+//!   ([`ad::AdModel`]), and get exact gradients, Jacobians and Hessians by
+//!   forward-mode AD ([`ad::DenseAdProblem`]).
+//! * [`check`]: compare any problem's derivatives with finite differences (tests only;
+//!   no solve loop uses finite differences).
+//!
+//! Multipliers follow IPOPT's convention: `L = σ f + λᵀ g`; bound multipliers are ≥ 0.
+//!
+//! ## Example
+//!
+//! ```no_run
+//! use num_dual::DualNum;
+//! use planner::nlp::ad::{AdModel, DenseAdProblem};
+//! use planner::nlp::{solve_with_callback, IterationControl, SolveOptions};
+//!
+//! /// Hock–Schittkowski 71.
+//! struct Hs71;
+//! impl AdModel for Hs71 {
+//!     fn num_variables(&self) -> usize { 4 }
+//!     fn num_constraints(&self) -> usize { 2 }
+//!     fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+//!         lower.fill(1.0);
+//!         upper.fill(5.0);
+//!     }
+//!     fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+//!         lower.copy_from_slice(&[25.0, 40.0]);
+//!         upper.copy_from_slice(&[f64::INFINITY, 40.0]);
+//!     }
+//!     fn initial_point(&self, x0: &mut [f64]) { x0.copy_from_slice(&[1.0, 5.0, 5.0, 1.0]); }
+//!     fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
+//!         x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2]
+//!     }
+//!     fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
+//!         g[0] = x[0] * x[1] * x[2] * x[3];
+//!         g[1] = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3];
+//!     }
+//! }
+//!
+//! let problem = DenseAdProblem::new(Hs71);
+//! let solution = solve_with_callback(&problem, &SolveOptions::default(), &mut |it| {
+//!     println!("{:>4} {:>14.6e} {:>9.2e}", it.iteration, it.objective, it.primal_infeasibility);
+//!     IterationControl::Continue
+//! })?;
+//! assert!(solution.status.is_success());
+//!
+//! // Warm start a neighbouring problem from this solution (point and multipliers):
+//! let options = SolveOptions { warm_start: Some(solution.warm_start()), ..SolveOptions::default() };
+//! let _again = planner::nlp::solve(&problem, &options)?;
+//! # Ok::<(), planner::nlp::NlpError>(())
+//! ```
+//!
+//! ## Why ripopt (measured, 2 cores, release build; details in `planner/NLP.md`)
+//!
+//! The default backend is [`ripopt`] 0.8.2, a pure-Rust port of IPOPT's algorithm
+//! (filter line search, adaptive barrier, inertia-corrected sparse LDLᵀ). Licence
+//! **EPL-2.0** (as IPOPT): a weak copyleft on ripopt's own files, compatible with
+//! linking from our MIT/Apache code. It was evaluated against IPOPT 3.14 + MUMPS
+//! (CasADi 3.8.2 from PyPI, same formulations and starts):
+//!
+//! * Hock–Schittkowski, 57 problems: 50 reach the published optimum to 1e-6; of the 7
+//!   others IPOPT ends at the same local/degenerate point on 4, ripopt is worse on one
+//!   (HS16), one is degenerate (HS108), one beats the published value (HS116).
+//! * Pendulum swing-up, trapezoidal collocation: 1503 variables in 13 iterations,
+//!   0.047 s; 4503 variables in 14 iterations, 0.155 s. IPOPT: the same iterations and
+//!   objective to 9 digits, 0.035 s / 0.111 s — ripopt is about 1.4× slower there.
+//!
+//! Same iteration counts as IPOPT, no system libraries, exact-Hessian support and
+//! warm starts made writing our own interior point method (or an SQP on clarabel)
+//! unjustified: the remaining gap is linear-algebra speed, not robustness.
 
 mod problem;
 mod ripopt_backend;
