@@ -30,6 +30,18 @@ enum Command {
         #[arg(long)]
         design: Option<String>,
     },
+    /// Plan a periodic HZD walking gait (the paper's two-step solve) and write the gait file.
+    Plan {
+        /// Robot URDF.
+        #[arg(long, default_value = "configs/robots/adam_planar.urdf")]
+        robot: PathBuf,
+        /// Planner config (TOML).
+        #[arg(long, default_value = "configs/planner/adam.toml")]
+        config: PathBuf,
+        /// Output gait file (JSON).
+        #[arg(long, default_value = "configs/gaits/adam_walk.json")]
+        out: PathBuf,
+    },
     /// Write the URDF of ADAM for a design (GenerateModel: inertias from the cubic fits).
     GenerateUrdf {
         /// Thigh length, m.
@@ -101,6 +113,57 @@ fn show_model(urdf: &PathBuf, design: Option<&str>) -> Result<()> {
     Ok(())
 }
 
+fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
+    let text = std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
+    let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
+    let cfg = planner::config::PlannerConfig::load(config)?;
+    let urdf_ref = relative_path(robot, out);
+    let mut last_print = std::time::Instant::now();
+    let planned = planner::plan::plan_gait(&model, &urdf_ref, &text, &cfg, &mut |p| match p {
+        planner::plan::Progress::Stage(s) => println!("solve: {s}"),
+        planner::plan::Progress::Iteration(_, r) => {
+            if r.iteration % 10 == 0 || last_print.elapsed().as_secs_f64() > 1.0 {
+                println!(
+                    "  iter {:>4}  objective {:>12.6e}  infeasibility {:>9.2e}  dual {:>9.2e}",
+                    r.iteration, r.objective, r.primal_infeasibility, r.dual_infeasibility
+                );
+                last_print = std::time::Instant::now();
+            }
+        }
+    })?;
+    if let Some(dir) = out.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    planned.gait.save(out)?;
+    let g = &planned.gait;
+    println!("\nNLP: {} variables, {} constraints, set-up {:.3} s", planned.size.0, planned.size.1, planned.setup_time_s);
+    println!("{:<18} {:>8} {:>6} {:>12} {:>10} {:>9} {:>9}", "stage", "status", "iter", "objective", "violation", "solve s", "eval s");
+    for s in &planned.stages {
+        println!(
+            "{:<18} {:>8} {:>6} {:>12.6} {:>10.1e} {:>9.3} {:>9.3}",
+            s.stage, s.status, s.iterations, s.objective, s.violation, s.solve_time_s, s.evaluation_time_s
+        );
+    }
+    println!(
+        "\nstep length {:.4} m | duration {:.4} s | speed {:.4} m/s | cost of transport {:.4}",
+        g.step_length_m, g.step_duration_s, g.speed_mps, g.cost_of_transport
+    );
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// `target` as seen from the folder of `from` (for the gait file's robot reference).
+fn relative_path(target: &std::path::Path, from: &std::path::Path) -> String {
+    let abs = |p: &std::path::Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let t = abs(target);
+    let f = from.parent().map(abs).unwrap_or_default();
+    let (tc, fc): (Vec<_>, Vec<_>) = (t.components().collect(), f.components().collect());
+    let common = tc.iter().zip(&fc).take_while(|(a, b)| a == b).count();
+    let mut parts: Vec<String> = vec!["..".to_string(); fc.len().saturating_sub(common)];
+    parts.extend(tc[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    parts.join("/")
+}
+
 fn demo() -> Result<()> {
     let path = PathBuf::from("configs/robots/adam_planar.urdf");
     println!("adam demo: loading {}\n", path.display());
@@ -126,6 +189,7 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo => demo(),
+        Command::Plan { robot, config, out } => plan(&robot, &config, &out),
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
         Command::GenerateUrdf { thigh, shin, out } => {
             let text = generate_urdf(&DesignLengths {

@@ -1,0 +1,144 @@
+//! The robot as the planner sees it: a planar point-foot biped in pinned-stance coordinates.
+//!
+//! The planner's coordinates are the *reduced* ones: torso pitch and the actuated joints (design
+//! joints are parameters, base position follows from the stance foot sitting at the origin). Each
+//! reduced state (q_r, q̇_r, q̈_r) maps to the model's full floating-base state by placing the base
+//! so that the stance foot is at the world origin, at rest and unaccelerated.
+
+use crate::{PlannerError, Result};
+use model::gait::OutputDefinition;
+use model::robot::{JointRole, Legs, BASE_DOF};
+use model::{PlanarModel, Real, Side};
+
+/// A planar biped prepared for planning.
+#[derive(Clone, Debug)]
+pub struct PlanarBiped {
+    /// The robot model.
+    pub model: PlanarModel,
+    /// Its legs.
+    pub legs: Legs,
+    /// The stance leg of the planned step.
+    pub stance: Side,
+    /// (full coordinate, value) of every design joint, m.
+    pub design: Vec<(usize, f64)>,
+    /// Full coordinate of each reduced coordinate: pitch, then the actuated joints in model order.
+    pub reduced: Vec<usize>,
+    /// Reduced index of each actuator (B's columns, model order).
+    pub actuators: Vec<usize>,
+    /// Relabeling in reduced coordinates: after impact, reduced coordinate i takes the value of
+    /// reduced coordinate `relabel[i]`.
+    pub relabel: Vec<usize>,
+    /// The outputs (ADAM's: stance hip, stance knee, swing hip, swing knee).
+    pub outputs: Vec<OutputDefinition>,
+    /// Reduced index of each output's joint.
+    pub output_coords: Vec<usize>,
+}
+
+impl PlanarBiped {
+    /// Prepares `model` with every design joint at `design_values` (in design-joint order, or all
+    /// zero when empty) for a step on `stance`.
+    pub fn new(model: PlanarModel, stance: Side, design_values: &[f64]) -> Result<Self> {
+        let legs = model.legs()?;
+        let design_joints = model.design_joints();
+        if !design_values.is_empty() && design_values.len() != design_joints.len() {
+            return Err(PlannerError::Robot {
+                robot: model.name.clone(),
+                reason: format!("{} design values for {} design joints", design_values.len(), design_joints.len()),
+            });
+        }
+        let design = design_joints
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| (model.joints[j].coordinate, design_values.get(i).copied().unwrap_or(0.0)))
+            .collect();
+        let mut reduced = vec![2];
+        for j in &model.joints {
+            if j.role == JointRole::Actuated {
+                reduced.push(j.coordinate);
+            }
+        }
+        let index_of = |coord: usize| reduced.iter().position(|&c| c == coord);
+        let actuators = model
+            .actuated_joints()
+            .iter()
+            .map(|&j| index_of(model.joints[j].coordinate).unwrap_or(0))
+            .collect();
+        let perm = model.relabel_permutation();
+        let relabel = reduced
+            .iter()
+            .map(|&c| index_of(perm[c]).unwrap_or(0))
+            .collect();
+        let outputs = OutputDefinition::adam();
+        let mut output_coords = Vec::new();
+        for o in &outputs {
+            let j = model.require_joint(&o.joint_name(stance))?;
+            output_coords.push(index_of(model.joints[j].coordinate).unwrap_or(0));
+        }
+        Ok(Self {
+            model,
+            legs,
+            stance,
+            design,
+            reduced,
+            actuators,
+            relabel,
+            outputs,
+            output_coords,
+        })
+    }
+
+    /// Number of reduced coordinates.
+    pub fn nq(&self) -> usize {
+        self.reduced.len()
+    }
+
+    /// Number of actuators.
+    pub fn nu(&self) -> usize {
+        self.actuators.len()
+    }
+
+    /// The swing side.
+    pub fn swing(&self) -> Side {
+        self.stance.other()
+    }
+
+    /// Full (q, q̇, q̈) from the reduced state, with the stance foot pinned at the origin.
+    pub fn full_state<S: Real>(&self, qr: &[S], dqr: &[S], ddqr: &[S]) -> Result<[Vec<S>; 3]> {
+        let n = self.model.dof();
+        let z = S::zero();
+        let (mut q, mut dq, mut ddq) = (vec![z; n], vec![z; n], vec![z; n]);
+        for (i, &c) in self.reduced.iter().enumerate() {
+            q[c] = qr[i];
+            dq[c] = dqr[i];
+            ddq[c] = ddqr[i];
+        }
+        for &(c, v) in &self.design {
+            q[c] = S::from(v);
+        }
+        let st = self.model.body_states(&q, &dq)?;
+        let foot = self.legs.side(self.stance).foot;
+        let p = self.model.frame_position_in(&st, foot);
+        let v = self.model.frame_velocity_in(&st, foot);
+        let mut a = self.model.frame_bias_acceleration_in(&st, foot);
+        self.model
+            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, val| a[r] += val * ddq[c]);
+        for k in 0..2 {
+            q[k] = -p[k];
+            dq[k] = -v[k];
+            ddq[k] = -a[k];
+        }
+        debug_assert!(BASE_DOF == 3);
+        Ok([q, dq, ddq])
+    }
+
+    /// The stance-foot Jacobian's column `c` (x and z rows) at full q.
+    pub fn stance_jacobian<S: Real>(&self, q: &[S]) -> Result<Vec<[S; 2]>> {
+        let st = self.model.body_poses(q)?;
+        let foot = self.legs.side(self.stance).foot;
+        let p = self.model.frame_position_in(&st, foot);
+        let mut cols = vec![[S::zero(); 2]; self.model.dof()];
+        self.model
+            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, v| cols[c][r] = v);
+        Ok(cols)
+    }
+}

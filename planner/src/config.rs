@@ -1,0 +1,226 @@
+//! The planner configuration (`configs/planner/*.toml`): checked data with a schema version.
+
+use crate::{PlannerError, Result};
+use model::Side;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The config schema version this build reads.
+pub const PLANNER_CONFIG_VERSION: u32 = 1;
+
+/// Collocation settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CollocationConfig {
+    /// Hermite–Simpson intervals N (2N + 1 collocation points).
+    pub intervals: usize,
+    /// Bézier degree b of the desired outputs.
+    pub bezier_degree: usize,
+    /// ε of the output dynamics ÿ + 2εẏ + ε²y = 0 imposed at every point, 1/s.
+    pub output_gain_per_s: f64,
+}
+
+/// The gait's essential and physical constraints.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaitConfig {
+    /// The stance leg of the planned step (the other steps are its mirror image).
+    pub stance_leg: Side,
+    /// Step length range, m (paper Table I: 0.15–0.35).
+    pub step_length_m: [f64; 2],
+    /// Step duration range, s (paper Table I: 0.6–0.9).
+    pub step_duration_s: [f64; 2],
+    /// Swing-foot height at mid-step, at least, m.
+    pub swing_clearance_m: f64,
+    /// Downward swing-foot velocity at impact, at least, m/s.
+    pub impact_velocity_mps: f64,
+    /// Upward velocity of the old stance foot just after impact, at least, m/s.
+    pub liftoff_velocity_mps: f64,
+    /// Coulomb friction coefficient μ at the stance foot (forces and the impact impulse).
+    pub friction_coefficient: f64,
+    /// Normal contact force at the stance foot, at least, N.
+    pub min_normal_force_n: f64,
+    /// Torso pitch range, rad.
+    pub pitch_limits_rad: [f64; 2],
+}
+
+/// The cost: weighted mechanical cost of transport.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CostConfig {
+    /// Weight w_i per actuated joint, in the model's coordinate order.
+    pub weights: Vec<f64>,
+}
+
+/// Solver settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverConfig {
+    /// Convergence tolerance.
+    pub tolerance: f64,
+    /// Iteration limit per solve.
+    pub max_iterations: usize,
+}
+
+/// A planner config file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlannerConfig {
+    /// Must equal [`PLANNER_CONFIG_VERSION`].
+    pub schema_version: u32,
+    /// Collocation.
+    pub collocation: CollocationConfig,
+    /// Constraints.
+    pub gait: GaitConfig,
+    /// Cost.
+    pub cost: CostConfig,
+    /// Solver.
+    pub solver: SolverConfig,
+}
+
+impl Default for PlannerConfig {
+    fn default() -> Self {
+        Self {
+            schema_version: PLANNER_CONFIG_VERSION,
+            collocation: CollocationConfig {
+                intervals: 20,
+                bezier_degree: 5,
+                output_gain_per_s: 10.0,
+            },
+            gait: GaitConfig {
+                stance_leg: Side::Right,
+                step_length_m: [0.15, 0.35],
+                step_duration_s: [0.6, 0.9],
+                swing_clearance_m: 0.03,
+                impact_velocity_mps: 0.01,
+                liftoff_velocity_mps: 0.0,
+                friction_coefficient: 0.6,
+                min_normal_force_n: 0.0,
+                pitch_limits_rad: [-0.5, 0.5],
+            },
+            cost: CostConfig {
+                weights: vec![1.0; 4],
+            },
+            solver: SolverConfig {
+                tolerance: 1e-6,
+                max_iterations: 500,
+            },
+        }
+    }
+}
+
+impl PlannerConfig {
+    /// Reads and validates a config file.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|error| PlannerError::Io {
+            path: origin.clone(),
+            error,
+        })?;
+        Self::from_toml(&text, &origin)
+    }
+
+    /// Parses and validates TOML; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self> {
+        let cfg: Self = toml::from_str(text).map_err(|e| PlannerError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        cfg.validate(origin)?;
+        Ok(cfg)
+    }
+
+    /// Rejects out-of-range values, naming the field.
+    pub fn validate(&self, origin: &str) -> Result<()> {
+        let bad = |field: &str, value: String, reason: &str| PlannerError::InvalidField {
+            origin: origin.to_string(),
+            field: field.to_string(),
+            value,
+            reason: reason.to_string(),
+        };
+        if self.schema_version != PLANNER_CONFIG_VERSION {
+            return Err(bad(
+                "schema_version",
+                self.schema_version.to_string(),
+                &format!("this build reads planner config version {PLANNER_CONFIG_VERSION}"),
+            ));
+        }
+        let c = &self.collocation;
+        if !(4..=200).contains(&c.intervals) {
+            return Err(bad("collocation.intervals", c.intervals.to_string(), "must be in 4..=200"));
+        }
+        if !(2..=model::bezier::MAX_BEZIER_DEGREE).contains(&c.bezier_degree) {
+            return Err(bad(
+                "collocation.bezier_degree",
+                c.bezier_degree.to_string(),
+                &format!("must be in 2..={}", model::bezier::MAX_BEZIER_DEGREE),
+            ));
+        }
+        let positive = |field: &str, v: f64| -> Result<()> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "must be a positive number"))
+            }
+        };
+        let nonneg = |field: &str, v: f64| -> Result<()> {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "must be a finite number ≥ 0"))
+            }
+        };
+        let range = |field: &str, r: [f64; 2]| -> Result<()> {
+            if r[0].is_finite() && r[1].is_finite() && r[0] <= r[1] {
+                Ok(())
+            } else {
+                Err(bad(field, format!("{r:?}"), "must be [lower, upper] with lower ≤ upper"))
+            }
+        };
+        positive("collocation.output_gain_per_s", c.output_gain_per_s)?;
+        let g = &self.gait;
+        range("gait.step_length_m", g.step_length_m)?;
+        positive("gait.step_length_m[0]", g.step_length_m[0])?;
+        range("gait.step_duration_s", g.step_duration_s)?;
+        positive("gait.step_duration_s[0]", g.step_duration_s[0])?;
+        range("gait.pitch_limits_rad", g.pitch_limits_rad)?;
+        nonneg("gait.swing_clearance_m", g.swing_clearance_m)?;
+        nonneg("gait.impact_velocity_mps", g.impact_velocity_mps)?;
+        nonneg("gait.liftoff_velocity_mps", g.liftoff_velocity_mps)?;
+        positive("gait.friction_coefficient", g.friction_coefficient)?;
+        nonneg("gait.min_normal_force_n", g.min_normal_force_n)?;
+        for (i, w) in self.cost.weights.iter().enumerate() {
+            nonneg(&format!("cost.weights[{i}]"), *w)?;
+        }
+        positive("solver.tolerance", self.solver.tolerance)?;
+        if self.solver.max_iterations == 0 {
+            return Err(bad("solver.max_iterations", "0".into(), "must be at least 1"));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_round_trips_through_toml() {
+        let cfg = PlannerConfig::default();
+        let text = toml::to_string(&cfg).expect("serializes");
+        assert_eq!(PlannerConfig::from_toml(&text, "x.toml").expect("parses"), cfg);
+    }
+
+    #[test]
+    fn bad_values_name_the_field() {
+        let text = toml::to_string(&PlannerConfig::default())
+            .expect("serializes")
+            .replace("friction_coefficient = 0.6", "friction_coefficient = -1.0");
+        let e = PlannerConfig::from_toml(&text, "x.toml").expect_err("rejected").to_string();
+        assert!(e.contains("x.toml") && e.contains("gait.friction_coefficient") && e.contains("-1"), "{e}");
+        let text = toml::to_string(&PlannerConfig::default()).expect("serializes") + "\nsurprise = 1\n";
+        let e = PlannerConfig::from_toml(&text, "x.toml").expect_err("rejected").to_string();
+        assert!(e.contains("surprise"), "{e}");
+    }
+}

@@ -1,0 +1,63 @@
+//! The error type of the `planner` crate.
+
+/// Result alias of the `planner` crate.
+pub type Result<T, E = PlannerError> = std::result::Result<T, E>;
+
+/// What can go wrong while configuring, solving or verifying a gait.
+#[derive(Debug, thiserror::Error)]
+pub enum PlannerError {
+    /// The robot model or a model computation failed.
+    #[error(transparent)]
+    Model(#[from] model::ModelError),
+    /// A config file could not be read.
+    #[error("{path}: {error}")]
+    Io {
+        /// The file.
+        path: String,
+        /// The OS error.
+        error: std::io::Error,
+    },
+    /// A config file is not valid TOML for the planner's schema.
+    #[error("{origin}: {message}")]
+    Parse {
+        /// The file.
+        origin: String,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// A config value is out of range.
+    #[error("{origin}: field '{field}' = {value}: {reason}")]
+    InvalidField {
+        /// The file.
+        origin: String,
+        /// Dotted field path.
+        field: String,
+        /// The value.
+        value: String,
+        /// Why it is rejected.
+        reason: String,
+    },
+    /// The robot does not fit the planner (naming, actuators).
+    #[error("robot '{robot}': {reason}")]
+    Robot {
+        /// The robot name.
+        robot: String,
+        /// What is missing.
+        reason: String,
+    },
+    /// The NLP solver failed or ended without a usable solution.
+    #[error("{stage}: the solver ended with status {status} after {iterations} iterations (constraint violation {violation:.2e})")]
+    NotSolved {
+        /// Which solve.
+        stage: String,
+        /// The solver's status.
+        status: String,
+        /// Iterations used.
+        iterations: usize,
+        /// Largest constraint violation at the end.
+        violation: f64,
+    },
+    /// The solver itself reported an error.
+    #[error("solver error: {0}")]
+    Solver(String),
+}

@@ -1,0 +1,189 @@
+//! The paper's two-step solve (Sec. IV-C) and the gait file it produces.
+//!
+//! Step 1 finds a feasible periodic gait from the hand-built guess with no cost; step 2 starts
+//! from it and minimizes the mechanical cost of transport. Both run sequentially with a fixed
+//! probe seed, so the same model and config give the same gait bit for bit.
+
+use crate::biped::PlanarBiped;
+use crate::collocation::HzdProblem;
+use crate::config::PlannerConfig;
+use crate::guess::initial_guess;
+use crate::nlp::{self, IterationControl, IterationReport, SolveOptions};
+use crate::{PlannerError, Result};
+use model::gait::{
+    sha256_hex, BezierSpec, GaitFile, PhaseDefinition, RobotReference, RobotState, SolverSummary, GAIT_SCHEMA_VERSION,
+};
+use model::design::DesignLengths;
+use model::PlanarModel;
+use std::time::Instant;
+
+/// What one solve did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageReport {
+    /// `feasibility` or `cost of transport`.
+    pub stage: &'static str,
+    /// Solver status.
+    pub status: String,
+    /// Iterations.
+    pub iterations: usize,
+    /// Final objective.
+    pub objective: f64,
+    /// Largest constraint or bound violation at the end.
+    pub violation: f64,
+    /// Wall time of the solve, s.
+    pub solve_time_s: f64,
+    /// Wall time spent evaluating the problem (derivatives included), s.
+    pub evaluation_time_s: f64,
+}
+
+/// A planned gait and how it was found.
+#[derive(Clone, Debug)]
+pub struct PlannedGait {
+    /// The gait file content.
+    pub gait: GaitFile,
+    /// One report per solve.
+    pub stages: Vec<StageReport>,
+    /// The final NLP point.
+    pub x: Vec<f64>,
+    /// Variables and constraints of the NLP.
+    pub size: (usize, usize),
+    /// Set-up time (problem construction, sparsity detection), s.
+    pub setup_time_s: f64,
+}
+
+/// A progress event for a live display.
+#[derive(Clone, Copy, Debug)]
+pub enum Progress<'a> {
+    /// A solve starts.
+    Stage(&'static str),
+    /// One solver iteration.
+    Iteration(&'static str, &'a IterationReport),
+}
+
+fn solve_stage(
+    problem: &HzdProblem,
+    stage: &'static str,
+    config: &PlannerConfig,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<(Vec<f64>, StageReport)> {
+    on_progress(Progress::Stage(stage));
+    let options = SolveOptions {
+        tolerance: config.solver.tolerance,
+        constraint_violation_tolerance: 1e-6,
+        max_iterations: config.solver.max_iterations,
+        ..SolveOptions::default()
+    };
+    let mut callback = |r: &IterationReport| {
+        on_progress(Progress::Iteration(stage, r));
+        IterationControl::Continue
+    };
+    let sol = nlp::solve_with_callback(problem, &options, &mut callback).map_err(|e| PlannerError::Solver(e.to_string()))?;
+    let violation = problem.max_violation(&sol.x);
+    let report = StageReport {
+        stage,
+        status: format!("{:?}", sol.status).to_lowercase(),
+        iterations: sol.statistics.iterations,
+        objective: sol.statistics.objective,
+        violation,
+        solve_time_s: sol.statistics.total_time.as_secs_f64(),
+        evaluation_time_s: sol.statistics.evaluation_time.as_secs_f64(),
+    };
+    if !sol.status.is_success() || violation > 1e-5 {
+        return Err(PlannerError::NotSolved {
+            stage: stage.to_string(),
+            status: report.status.clone(),
+            iterations: report.iterations,
+            violation,
+        });
+    }
+    Ok((sol.x, report))
+}
+
+/// Plans a periodic HZD gait for `model` with its design joints at zero (the URDF's design).
+/// `urdf_ref` is how the gait file names the URDF and `urdf_text` its content (for the hash).
+pub fn plan_gait(
+    model: &PlanarModel,
+    urdf_ref: &str,
+    urdf_text: &str,
+    config: &PlannerConfig,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<PlannedGait> {
+    config.validate("planner config")?;
+    let setup = Instant::now();
+    let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
+    let step0 = 0.5 * (config.gait.step_length_m[0] + config.gait.step_length_m[1]);
+    let step0 = step0.clamp(config.gait.step_length_m[0], 0.25_f64.max(config.gait.step_length_m[0]));
+    let duration0 = 0.5 * (config.gait.step_duration_s[0] + config.gait.step_duration_s[1]);
+    let probe = HzdProblem::new(biped.clone(), config.clone(), Vec::new(), false)?;
+    let guess = initial_guess(&biped, &probe.layout, step0, duration0)?;
+    let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
+    let setup_time_s = setup.elapsed().as_secs_f64();
+    let size = (nlp::NlpProblem::num_variables(&feasibility), nlp::NlpProblem::num_constraints(&feasibility));
+    let (x1, r1) = solve_stage(&feasibility, "feasibility", config, on_progress)?;
+    let costed = HzdProblem::new(biped, config.clone(), x1, true)?;
+    let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
+    let gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
+    Ok(PlannedGait {
+        gait,
+        stages: vec![r1, r2],
+        x,
+        size,
+        setup_time_s,
+    })
+}
+
+/// The gait file for the NLP point `x`.
+pub fn gait_from_solution(
+    problem: &HzdProblem,
+    x: &[f64],
+    urdf_ref: &str,
+    urdf_text: &str,
+    stages: &[StageReport],
+) -> Result<GaitFile> {
+    let l = &problem.layout;
+    let bp = &problem.biped;
+    let alpha = (0..l.m)
+        .map(|o| (0..=l.degree).map(|j| x[l.alpha(o, j)]).collect())
+        .collect();
+    let qr = &x[l.q(0)..l.q(0) + l.nq];
+    let dqr = &x[l.dq(0)..l.dq(0) + l.nq];
+    let [q, dq, _] = bp.full_state(qr, dqr, &vec![0.0; l.nq])?;
+    let q_nom = bp.model.nominal_pose()?;
+    let (thigh, shin) = bp.model.leg_lengths(&q_nom, bp.stance)?;
+    let (duration, length) = (x[l.duration()], x[l.length()]);
+    Ok(GaitFile {
+        schema_version: GAIT_SCHEMA_VERSION,
+        robot: RobotReference {
+            name: bp.model.name.clone(),
+            urdf: urdf_ref.to_string(),
+            sha256: sha256_hex(urdf_text),
+        },
+        design: DesignLengths {
+            thigh_length_m: thigh,
+            shin_length_m: shin,
+        },
+        outputs: bp.outputs.clone(),
+        bezier: BezierSpec {
+            degree: l.degree,
+            alpha,
+        },
+        phase: PhaseDefinition::StateBased {
+            theta_plus_rad: x[l.theta_plus()],
+            theta_minus_rad: x[l.theta_minus()],
+        },
+        stance_leg: bp.stance,
+        step_duration_s: duration,
+        step_length_m: length,
+        speed_mps: length / duration,
+        cost_of_transport: problem.cost_of_transport(x),
+        initial_state: Some(RobotState { q, dq }),
+        solver: SolverSummary {
+            solver: "ripopt 0.8 interior point via planner::nlp".into(),
+            status: stages.last().map(|s| s.status.clone()).unwrap_or_default(),
+            iterations: stages.iter().map(|s| s.iterations).sum(),
+            solve_time_s: stages.iter().map(|s| s.solve_time_s).sum(),
+            objective: stages.last().map(|s| s.objective).unwrap_or(0.0),
+            constraint_violation: problem.max_violation(x),
+        },
+    })
+}
