@@ -3,3 +3,4 @@
 //! Work in progress.
 
 pub mod a1;
+pub mod timing;
