@@ -3,4 +3,6 @@
 //! Work in progress.
 
 pub mod a1;
+pub mod bus;
+pub mod sim_bus;
 pub mod timing;
