@@ -4,5 +4,6 @@
 
 pub mod a1;
 pub mod bus;
+pub mod conformance;
 pub mod sim_bus;
 pub mod timing;
