@@ -357,6 +357,24 @@ mod tests {
         assert!(parse(" SG_ a : 0|8@1+ (1,0) [0|0] \"\" Y\n").is_err());
     }
 
+    /// Golden bytes from an independent tool: `cantools` (PyPI 45.1) loaded
+    /// `drivers/a1_can.dbc` and encoded A1_REPLY_05 with q = 1, dq = −2, tau = 3,
+    /// temperature = 50, error_flags = 1, mode = 1, enabled = 1. Re-mint with
+    /// `db.get_message_by_name('A1_REPLY_05').encode({...}).hex()`.
+    #[test]
+    fn cantools_encoded_reply_decodes_with_the_codec() {
+        let bytes = [0x3d, 0x8a, 0x3d, 0x77, 0x8b, 0x5a, 0x01, 0x05];
+        let r = decode_reply(0x185, &bytes).unwrap();
+        assert_eq!(r.motor, MotorId::new(5).unwrap());
+        assert!((r.q_rad - 1.0).abs() <= REPLY_Q.quantum() / 2.0);
+        assert!((r.dq_rad_s + 2.0).abs() <= REPLY_DQ.quantum() / 2.0);
+        assert!((r.tau_nm - 3.0).abs() <= REPLY_TAU.quantum() / 2.0);
+        assert_eq!(r.temperature_c, 50.0);
+        assert_eq!(r.errors, crate::a1::ErrorFlags::OVER_TEMPERATURE);
+        assert_eq!(r.mode, crate::a1::Mode::Damping);
+        assert!(r.enabled);
+    }
+
     #[test]
     fn shipped_dbc_decodes_like_the_codec() {
         let msgs = parse(SHIPPED).unwrap();
