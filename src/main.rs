@@ -5,11 +5,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(
-    name = "adam",
-    version,
-    about = "HZD co-design and walking for the ADAM humanoid"
-)]
+#[command(name = "adam", version, about = "HZD co-design and walking for the ADAM humanoid")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
