@@ -114,7 +114,8 @@ fn show_model(urdf: &PathBuf, design: Option<&str>) -> Result<()> {
 }
 
 fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
-    let text = std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
+    let text =
+        std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
     let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
     let cfg = planner::config::PlannerConfig::load(config)?;
     let urdf_ref = relative_path(robot, out);
@@ -136,12 +137,24 @@ fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
     }
     planned.gait.save(out)?;
     let g = &planned.gait;
-    println!("\nNLP: {} variables, {} constraints, set-up {:.3} s", planned.size.0, planned.size.1, planned.setup_time_s);
-    println!("{:<18} {:>8} {:>6} {:>12} {:>10} {:>9} {:>9}", "stage", "status", "iter", "objective", "violation", "solve s", "eval s");
+    println!(
+        "\nNLP: {} variables, {} constraints, set-up {:.3} s",
+        planned.size.0, planned.size.1, planned.setup_time_s
+    );
+    println!(
+        "{:<18} {:>8} {:>6} {:>12} {:>10} {:>9} {:>9}",
+        "stage", "status", "iter", "objective", "violation", "solve s", "eval s"
+    );
     for s in &planned.stages {
         println!(
             "{:<18} {:>8} {:>6} {:>12.6} {:>10.1e} {:>9.3} {:>9.3}",
-            s.stage, s.status, s.iterations, s.objective, s.violation, s.solve_time_s, s.evaluation_time_s
+            s.stage,
+            s.status,
+            s.iterations,
+            s.objective,
+            s.violation,
+            s.solve_time_s,
+            s.evaluation_time_s
         );
     }
     println!(
@@ -160,7 +173,11 @@ fn relative_path(target: &std::path::Path, from: &std::path::Path) -> String {
     let (tc, fc): (Vec<_>, Vec<_>) = (t.components().collect(), f.components().collect());
     let common = tc.iter().zip(&fc).take_while(|(a, b)| a == b).count();
     let mut parts: Vec<String> = vec!["..".to_string(); fc.len().saturating_sub(common)];
-    parts.extend(tc[common..].iter().map(|c| c.as_os_str().to_string_lossy().into_owned()));
+    parts.extend(
+        tc[common..]
+            .iter()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned()),
+    );
     parts.join("/")
 }
 

@@ -1,5 +1,58 @@
-//! # drivers: A1 motors over CAN, the IMU, and the simulated ADAM
+//! # drivers: A1 motors over CAN, for real and simulated
 //!
-//! Stands on [`model`]. Work in progress: the sans-IO A1-over-CAN codec (`drivers::a1`),
-//! the `MotorBus` trait with its SocketCAN and simulated backends, and the treadmill
-//! simulator (`drivers::sim`) arrive with the "Drivers" issue. Nothing here is usable yet.
+//! The hardware layer of adam-hzd: it turns joint commands into CAN frames for the
+//! Unitree A1 actuators of ADAM and replies back into joint states, behind one trait that
+//! a real SocketCAN backend and a simulated one both implement.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`a1`] | sans-IO A1-over-CAN codec: frame table, ids, fixed-point fields; `a1_can.dbc` |
+//! | [`timing`] | CAN bus time of A1 traffic; `validate(rate, motors per bus, bitrate)` |
+//! | [`bus`] | the [`bus::MotorBus`] trait: configure → activate → exchange → deactivate, `Drop` = damping |
+//! | [`socketcan_bus`] | `MotorBus` on Linux SocketCAN, one interface per limb |
+//! | [`sim_bus`] | `MotorBus` on simulated A1 firmware and a pluggable [`sim_bus::JointPlant`] |
+//! | [`conformance`] | the checks every `MotorBus` must pass |
+//!
+//! ## Data flow of one control cycle
+//! ```text
+//! controller ── &[Command] ──▶ MotorBus::exchange ──▶ a1::encode_command ──▶ [u8; 8] frames
+//!                                                                              │
+//!            SocketCanBus: write to can0..can3 ◀──────────────────────────────┤
+//!            SimBus: simulated firmware decodes, runs PD at 10 kHz on the JointPlant
+//!                                                                              │
+//! controller ◀── &mut [Reply] ◀── a1::decode_reply ◀── reply frames ◀──────────┘
+//! ```
+//! Nothing in `exchange` allocates; the caller sizes the command and reply slices once.
+//! Time is an argument (`budget`); only `SocketCanBus` reads the clock.
+//!
+//! ## Example
+//! ```no_run
+//! use core::time::Duration;
+//! use drivers::a1::{Command, MotorId, Reply};
+//! use drivers::bus::{MotorBus, MotorSpec};
+//! use drivers::socketcan_bus::SocketCanBus;
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! // Both legs: hip pitch (id 1) and knee (id 2) on each leg's bus.
+//! drivers::timing::validate(1000.0, 2, drivers::timing::DEFAULT_BITRATE_BPS)?;
+//! let mut bus = SocketCanBus::open(&["can0", "can1"])?;
+//! let ids = [1, 2, 3, 4].map(|n| MotorId::new(n).expect("id < 128"));
+//! let specs = [0, 0, 1, 1].iter().zip(ids).map(|(&bus, id)| MotorSpec { bus, id });
+//! bus.configure(&specs.collect::<Vec<_>>())?;
+//! bus.activate()?;
+//! let commands = ids.map(|id| Command::pd(id, 0.0, 0.0, 60.0, 1.5, 0.0));
+//! let mut replies = ids.map(Reply::zeroed);
+//! for _ in 0..1000 {
+//!     bus.exchange(&commands, &mut replies, Duration::from_millis(1))?;
+//! }
+//! bus.deactivate()?; // every motor to damping (dropping `bus` would do the same)
+//! # Ok(())
+//! # }
+//! ```
+
+pub mod a1;
+pub mod bus;
+pub mod conformance;
+pub mod sim_bus;
+pub mod socketcan_bus;
+pub mod timing;

@@ -43,13 +43,22 @@ impl PlanarBiped {
         if !design_values.is_empty() && design_values.len() != design_joints.len() {
             return Err(PlannerError::Robot {
                 robot: model.name.clone(),
-                reason: format!("{} design values for {} design joints", design_values.len(), design_joints.len()),
+                reason: format!(
+                    "{} design values for {} design joints",
+                    design_values.len(),
+                    design_joints.len()
+                ),
             });
         }
         let design = design_joints
             .iter()
             .enumerate()
-            .map(|(i, &j)| (model.joints[j].coordinate, design_values.get(i).copied().unwrap_or(0.0)))
+            .map(|(i, &j)| {
+                (
+                    model.joints[j].coordinate,
+                    design_values.get(i).copied().unwrap_or(0.0),
+                )
+            })
             .collect();
         let mut reduced = vec![2];
         for j in &model.joints {
@@ -121,7 +130,9 @@ impl PlanarBiped {
         let v = self.model.frame_velocity_in(&st, foot);
         let mut a = self.model.frame_bias_acceleration_in(&st, foot);
         self.model
-            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, val| a[r] += val * ddq[c]);
+            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, val| {
+                a[r] += val * ddq[c]
+            });
         for k in 0..2 {
             q[k] = -p[k];
             dq[k] = -v[k];
@@ -138,7 +149,9 @@ impl PlanarBiped {
         let p = self.model.frame_position_in(&st, foot);
         let mut cols = vec![[S::zero(); 2]; self.model.dof()];
         self.model
-            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, v| cols[c][r] = v);
+            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, v| {
+                cols[c][r] = v
+            });
         Ok(cols)
     }
 }

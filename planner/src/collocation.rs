@@ -207,13 +207,20 @@ struct ObjectiveSlots {
 }
 
 fn lcg(state: &mut u64) -> f64 {
-    *state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     ((*state >> 11) as f64) / ((1u64 << 53) as f64)
 }
 
 impl HzdProblem {
     /// Builds the problem; `initial` is the starting point (see [`crate::guess`]).
-    pub fn new(biped: PlanarBiped, config: PlannerConfig, initial: Vec<f64>, with_cost: bool) -> crate::Result<Self> {
+    pub fn new(
+        biped: PlanarBiped,
+        config: PlannerConfig,
+        initial: Vec<f64>,
+        with_cost: bool,
+    ) -> crate::Result<Self> {
         let layout = Layout {
             nq: biped.nq(),
             nu: biped.nu(),
@@ -270,7 +277,9 @@ impl HzdProblem {
 
     fn point_vars(&self, k: usize, with_ddq: bool) -> Vec<usize> {
         let l = &self.layout;
-        let mut v: Vec<usize> = (l.q(k)..l.q(k) + l.nq).chain(l.dq(k)..l.dq(k) + l.nq).collect();
+        let mut v: Vec<usize> = (l.q(k)..l.q(k) + l.nq)
+            .chain(l.dq(k)..l.dq(k) + l.nq)
+            .collect();
         if with_ddq {
             v.extend(l.ddq(k)..l.ddq(k) + l.nq);
         }
@@ -344,7 +353,12 @@ impl HzdProblem {
         }
         let mut vars = self.point_vars(last, false);
         vars.push(l.length());
-        self.add(Kind::SwingEnd, vars, &[0.0, -inf], &[0.0, -g.impact_velocity_mps]);
+        self.add(
+            Kind::SwingEnd,
+            vars,
+            &[0.0, -inf],
+            &[0.0, -g.impact_velocity_mps],
+        );
         let mut vars: Vec<usize> = (l.q(0)..l.q(0) + nq).collect();
         vars.push(l.theta_plus());
         self.add(Kind::Phase(false), vars, &[0.0], &[0.0]);
@@ -415,7 +429,10 @@ impl HzdProblem {
                 self.jac_cols.push(blk.vars[j]);
             }
             blk.jac = jac;
-            blk.hess_slots = pairs.iter().map(|&(a, b)| slot(blk.vars[a], blk.vars[b], &mut hess)).collect();
+            blk.hess_slots = pairs
+                .iter()
+                .map(|&(a, b)| slot(blk.vars[a], blk.vars[b], &mut hess))
+                .collect();
             blk.hess = pairs;
             built.push(blk);
         }
@@ -461,18 +478,36 @@ impl HzdProblem {
                 }
                 if outh.iter().any(|o| o.eps1eps2 != 0.0) {
                     // Order each pair so the global row index is the larger.
-                    pairs.push(if blk.vars[a] >= blk.vars[b] { (a, b) } else { (b, a) });
+                    pairs.push(if blk.vars[a] >= blk.vars[b] {
+                        (a, b)
+                    } else {
+                        (b, a)
+                    });
                 }
             }
         }
         (jac, pairs)
     }
 
-    fn hyper_eval(&self, kind: Kind, z: &[f64], a: usize, b: usize, out: &mut [HyperDual64]) -> Result<(), DomainError> {
+    fn hyper_eval(
+        &self,
+        kind: Kind,
+        z: &[f64],
+        a: usize,
+        b: usize,
+        out: &mut [HyperDual64],
+    ) -> Result<(), DomainError> {
         let zh: Vec<HyperDual64> = z
             .iter()
             .enumerate()
-            .map(|(i, &v)| HyperDual64::new(v, if i == a { 1.0 } else { 0.0 }, if i == b { 1.0 } else { 0.0 }, 0.0))
+            .map(|(i, &v)| {
+                HyperDual64::new(
+                    v,
+                    if i == a { 1.0 } else { 0.0 },
+                    if i == b { 1.0 } else { 0.0 },
+                    0.0,
+                )
+            })
             .collect();
         self.eval_block(kind, &zh, out)
     }
@@ -490,7 +525,10 @@ impl HzdProblem {
                 let ddqr: Vec<S> = z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect();
                 let us = &z[3 * nq..3 * nq + nu];
                 let [q, dq, ddq] = bp.full_state(qr, dqr, &ddqr).map_err(|_| DomainError)?;
-                let r = bp.model.inverse_dynamics(&q, &dq, &ddq).map_err(|_| DomainError)?;
+                let r = bp
+                    .model
+                    .inverse_dynamics(&q, &dq, &ddq)
+                    .map_err(|_| DomainError)?;
                 let lam = [r[0], r[1]];
                 let jac = bp.stance_jacobian(&q).map_err(|_| DomainError)?;
                 for (i, &c) in bp.reduced.iter().enumerate() {
@@ -509,7 +547,10 @@ impl HzdProblem {
                 let (ddqr, rest): (Vec<S>, &[S]) = if start {
                     (vec![S::zero(); nq], &z[2 * nq..])
                 } else {
-                    (z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect(), &z[3 * nq..])
+                    (
+                        z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect(),
+                        &z[3 * nq..],
+                    )
                 };
                 let alpha = &rest[..=l.degree];
                 let (tp, tm) = (rest[l.degree + 1], rest[l.degree + 2]);
@@ -551,8 +592,14 @@ impl HzdProblem {
             }
             Kind::SwingHeight | Kind::SwingEnd => {
                 let zero = vec![S::zero(); nq];
-                let dqr = if kind == Kind::SwingEnd { &z[nq..2 * nq] } else { &zero[..] };
-                let [q, dq, _] = bp.full_state(&z[..nq], dqr, &zero).map_err(|_| DomainError)?;
+                let dqr = if kind == Kind::SwingEnd {
+                    &z[nq..2 * nq]
+                } else {
+                    &zero[..]
+                };
+                let [q, dq, _] = bp
+                    .full_state(&z[..nq], dqr, &zero)
+                    .map_err(|_| DomainError)?;
                 let st = bp.model.body_states(&q, &dq).map_err(|_| DomainError)?;
                 let foot = bp.legs.side(bp.swing()).foot;
                 let p = bp.model.frame_position_in(&st, foot);
@@ -566,8 +613,13 @@ impl HzdProblem {
             }
             Kind::Phase(_) => {
                 let zero = vec![S::zero(); nq];
-                let [q, _, _] = bp.full_state(&z[..nq], &zero, &zero).map_err(|_| DomainError)?;
-                let th = bp.model.stance_leg_angle(&q, &bp.legs, bp.stance).map_err(|_| DomainError)?;
+                let [q, _, _] = bp
+                    .full_state(&z[..nq], &zero, &zero)
+                    .map_err(|_| DomainError)?;
+                let th = bp
+                    .model
+                    .stance_leg_angle(&q, &bp.legs, bp.stance)
+                    .map_err(|_| DomainError)?;
                 out[0] = th - z[nq];
             }
             Kind::Impact => {
@@ -576,7 +628,10 @@ impl HzdProblem {
                 let zero = vec![S::zero(); nq];
                 let [q, dq, _] = bp.full_state(qn, dqn, &zero).map_err(|_| DomainError)?;
                 let swing_foot = bp.legs.side(bp.swing()).foot;
-                let imp = bp.model.impact(&q, &dq, swing_foot).map_err(|_| DomainError)?;
+                let imp = bp
+                    .model
+                    .impact(&q, &dq, swing_foot)
+                    .map_err(|_| DomainError)?;
                 let dq_plus: Vec<S> = imp.dq_plus.iter().copied().collect();
                 for i in 0..nq {
                     let src = bp.relabel[i];
@@ -587,8 +642,13 @@ impl HzdProblem {
                 out[2 * nq] = lam[1];
                 out[2 * nq + 1] = lam[1] * mu - lam[0];
                 out[2 * nq + 2] = lam[1] * mu + lam[0];
-                let st = bp.model.body_states(&q, &dq_plus).map_err(|_| DomainError)?;
-                let v = bp.model.frame_velocity_in(&st, bp.legs.side(bp.stance).foot);
+                let st = bp
+                    .model
+                    .body_states(&q, &dq_plus)
+                    .map_err(|_| DomainError)?;
+                let v = bp
+                    .model
+                    .frame_velocity_in(&st, bp.legs.side(bp.stance).foot);
                 out[2 * nq + 3] = v[1];
             }
         }
@@ -606,7 +666,10 @@ impl HzdProblem {
 
     /// K = 1 / (6 N M g): Φ = K T S / d.
     fn cost_factor(&self) -> f64 {
-        1.0 / (6.0 * self.layout.intervals as f64 * self.total_mass_kg * self.biped.model.gravity_mps2)
+        1.0 / (6.0
+            * self.layout.intervals as f64
+            * self.total_mass_kg
+            * self.biped.model.gravity_mps2)
     }
 
     /// The mechanical cost of transport at x (whether or not it is the objective).
@@ -625,7 +688,10 @@ impl HzdProblem {
             .iter()
             .enumerate()
             .map(|(i, &v)| (self.lower_g[i] - v).max(v - self.upper_g[i]).max(0.0));
-        let vars = x.iter().enumerate().map(|(i, &v)| (lo[i] - v).max(v - hi[i]).max(0.0));
+        let vars = x
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (lo[i] - v).max(v - hi[i]).max(0.0));
         cons.chain(vars).fold(0.0, f64::max)
     }
 
@@ -724,7 +790,11 @@ impl NlpProblem for HzdProblem {
     }
 
     fn objective(&self, x: &[f64]) -> Result<f64, DomainError> {
-        Ok(if self.with_cost { self.cost_of_transport(x) } else { 0.0 })
+        Ok(if self.with_cost {
+            self.cost_of_transport(x)
+        } else {
+            0.0
+        })
     }
 
     fn gradient(&self, x: &[f64], gradient: &mut [f64]) -> Result<(), DomainError> {
@@ -806,11 +876,19 @@ impl NlpProblem for HzdProblem {
             out.resize(blk.n_out, HyperDual64::from(0.0));
             for (&(a, b), &slot) in blk.hess.iter().zip(&blk.hess_slots) {
                 self.hyper_eval(blk.kind, &z, a, b, &mut out[..blk.n_out])?;
-                values[slot] += out[..blk.n_out].iter().zip(mu).map(|(o, m)| o.eps1eps2 * m).sum::<f64>();
+                values[slot] += out[..blk.n_out]
+                    .iter()
+                    .zip(mu)
+                    .map(|(o, m)| o.eps1eps2 * m)
+                    .sum::<f64>();
             }
         }
         if self.with_cost && objective_factor != 0.0 {
-            let (k, t, d) = (self.cost_factor(), x[self.layout.duration()], x[self.layout.length()]);
+            let (k, t, d) = (
+                self.cost_factor(),
+                x[self.layout.duration()],
+                x[self.layout.length()],
+            );
             let s = self.power_sum(x);
             let sf = objective_factor * k;
             for (n, &(_, w)) in self.slack_weights.iter().enumerate() {

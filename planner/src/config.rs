@@ -148,7 +148,11 @@ impl PlannerConfig {
         }
         let c = &self.collocation;
         if !(4..=200).contains(&c.intervals) {
-            return Err(bad("collocation.intervals", c.intervals.to_string(), "must be in 4..=200"));
+            return Err(bad(
+                "collocation.intervals",
+                c.intervals.to_string(),
+                "must be in 4..=200",
+            ));
         }
         if !(2..=model::bezier::MAX_BEZIER_DEGREE).contains(&c.bezier_degree) {
             return Err(bad(
@@ -175,7 +179,11 @@ impl PlannerConfig {
             if r[0].is_finite() && r[1].is_finite() && r[0] <= r[1] {
                 Ok(())
             } else {
-                Err(bad(field, format!("{r:?}"), "must be [lower, upper] with lower ≤ upper"))
+                Err(bad(
+                    field,
+                    format!("{r:?}"),
+                    "must be [lower, upper] with lower ≤ upper",
+                ))
             }
         };
         positive("collocation.output_gain_per_s", c.output_gain_per_s)?;
@@ -195,7 +203,11 @@ impl PlannerConfig {
         }
         positive("solver.tolerance", self.solver.tolerance)?;
         if self.solver.max_iterations == 0 {
-            return Err(bad("solver.max_iterations", "0".into(), "must be at least 1"));
+            return Err(bad(
+                "solver.max_iterations",
+                "0".into(),
+                "must be at least 1",
+            ));
         }
         Ok(())
     }
@@ -209,7 +221,10 @@ mod tests {
     fn default_round_trips_through_toml() {
         let cfg = PlannerConfig::default();
         let text = toml::to_string(&cfg).expect("serializes");
-        assert_eq!(PlannerConfig::from_toml(&text, "x.toml").expect("parses"), cfg);
+        assert_eq!(
+            PlannerConfig::from_toml(&text, "x.toml").expect("parses"),
+            cfg
+        );
     }
 
     #[test]
@@ -217,10 +232,18 @@ mod tests {
         let text = toml::to_string(&PlannerConfig::default())
             .expect("serializes")
             .replace("friction_coefficient = 0.6", "friction_coefficient = -1.0");
-        let e = PlannerConfig::from_toml(&text, "x.toml").expect_err("rejected").to_string();
-        assert!(e.contains("x.toml") && e.contains("gait.friction_coefficient") && e.contains("-1"), "{e}");
-        let text = toml::to_string(&PlannerConfig::default()).expect("serializes") + "\nsurprise = 1\n";
-        let e = PlannerConfig::from_toml(&text, "x.toml").expect_err("rejected").to_string();
+        let e = PlannerConfig::from_toml(&text, "x.toml")
+            .expect_err("rejected")
+            .to_string();
+        assert!(
+            e.contains("x.toml") && e.contains("gait.friction_coefficient") && e.contains("-1"),
+            "{e}"
+        );
+        let text =
+            toml::to_string(&PlannerConfig::default()).expect("serializes") + "\nsurprise = 1\n";
+        let e = PlannerConfig::from_toml(&text, "x.toml")
+            .expect_err("rejected")
+            .to_string();
         assert!(e.contains("surprise"), "{e}");
     }
 }

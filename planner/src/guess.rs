@@ -15,7 +15,8 @@ use model::Side;
 /// Hip and knee angles putting the foot at `rel` (world, from the hip) with the torso upright.
 fn leg_ik(rel: [f64; 2], thigh_m: f64, shin_m: f64) -> (f64, f64) {
     let dist2 = (rel[0] * rel[0] + rel[1] * rel[1]).min((thigh_m + shin_m).powi(2) * 0.9999);
-    let cos_k = ((dist2 - thigh_m * thigh_m - shin_m * shin_m) / (2.0 * thigh_m * shin_m)).clamp(-1.0, 1.0);
+    let cos_k =
+        ((dist2 - thigh_m * thigh_m - shin_m * shin_m) / (2.0 * thigh_m * shin_m)).clamp(-1.0, 1.0);
     let knee = cos_k.acos();
     let direction = (-rel[0]).atan2(-rel[1]);
     let hip = direction - (shin_m * knee.sin()).atan2(thigh_m + shin_m * knee.cos());
@@ -27,7 +28,10 @@ fn pose(bp: &PlanarBiped, s: f64, step_m: f64, thigh_m: f64, shin_m: f64) -> Vec
     let height = 0.94 * (thigh_m + shin_m);
     let hip_x = -0.5 * step_m + step_m * s;
     let smooth = s * s * (3.0 - 2.0 * s);
-    let swing = [-step_m + 2.0 * step_m * smooth, 0.07 * (std::f64::consts::PI * s).sin()];
+    let swing = [
+        -step_m + 2.0 * step_m * smooth,
+        0.07 * (std::f64::consts::PI * s).sin(),
+    ];
     let (sh, sk) = leg_ik([-hip_x, -height], thigh_m, shin_m);
     let (wh, wk) = leg_ik([swing[0] - hip_x, swing[1] - height], thigh_m, shin_m);
     let mut q = vec![0.0; bp.nq()];
@@ -46,7 +50,12 @@ fn pose(bp: &PlanarBiped, s: f64, step_m: f64, thigh_m: f64, shin_m: f64) -> Vec
 }
 
 /// The initial point for `layout`.
-pub fn initial_guess(bp: &PlanarBiped, layout: &Layout, step_m: f64, duration_s: f64) -> Result<Vec<f64>> {
+pub fn initial_guess(
+    bp: &PlanarBiped,
+    layout: &Layout,
+    step_m: f64,
+    duration_s: f64,
+) -> Result<Vec<f64>> {
     let q_nom = {
         let mut q = bp.model.nominal_pose()?;
         for &(c, v) in &bp.design {
@@ -101,7 +110,10 @@ pub fn initial_guess(bp: &PlanarBiped, layout: &Layout, step_m: f64, duration_s:
                 }
             }
         }
-        let alpha = ata.lu().solve(&aty).unwrap_or_else(|| nalgebra::DVector::zeros(b + 1));
+        let alpha = ata
+            .lu()
+            .solve(&aty)
+            .unwrap_or_else(|| nalgebra::DVector::zeros(b + 1));
         for r in 0..=b {
             x[layout.alpha(o, r)] = alpha[r];
         }

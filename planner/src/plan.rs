@@ -10,10 +10,11 @@ use crate::config::PlannerConfig;
 use crate::guess::initial_guess;
 use crate::nlp::{self, IterationControl, IterationReport, SolveOptions};
 use crate::{PlannerError, Result};
-use model::gait::{
-    sha256_hex, BezierSpec, GaitFile, PhaseDefinition, RobotReference, RobotState, SolverSummary, GAIT_SCHEMA_VERSION,
-};
 use model::design::DesignLengths;
+use model::gait::{
+    sha256_hex, BezierSpec, GaitFile, PhaseDefinition, RobotReference, RobotState, SolverSummary,
+    GAIT_SCHEMA_VERSION,
+};
 use model::PlanarModel;
 use std::time::Instant;
 
@@ -77,7 +78,8 @@ fn solve_stage(
         on_progress(Progress::Iteration(stage, r));
         IterationControl::Continue
     };
-    let sol = nlp::solve_with_callback(problem, &options, &mut callback).map_err(|e| PlannerError::Solver(e.to_string()))?;
+    let sol = nlp::solve_with_callback(problem, &options, &mut callback)
+        .map_err(|e| PlannerError::Solver(e.to_string()))?;
     let violation = problem.max_violation(&sol.x);
     let report = StageReport {
         stage,
@@ -112,13 +114,19 @@ pub fn plan_gait(
     let setup = Instant::now();
     let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
     let step0 = 0.5 * (config.gait.step_length_m[0] + config.gait.step_length_m[1]);
-    let step0 = step0.clamp(config.gait.step_length_m[0], 0.25_f64.max(config.gait.step_length_m[0]));
+    let step0 = step0.clamp(
+        config.gait.step_length_m[0],
+        0.25_f64.max(config.gait.step_length_m[0]),
+    );
     let duration0 = 0.5 * (config.gait.step_duration_s[0] + config.gait.step_duration_s[1]);
     let probe = HzdProblem::new(biped.clone(), config.clone(), Vec::new(), false)?;
     let guess = initial_guess(&biped, &probe.layout, step0, duration0)?;
     let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
     let setup_time_s = setup.elapsed().as_secs_f64();
-    let size = (nlp::NlpProblem::num_variables(&feasibility), nlp::NlpProblem::num_constraints(&feasibility));
+    let size = (
+        nlp::NlpProblem::num_variables(&feasibility),
+        nlp::NlpProblem::num_constraints(&feasibility),
+    );
     let (x1, r1) = solve_stage(&feasibility, "feasibility", config, on_progress)?;
     let costed = HzdProblem::new(biped, config.clone(), x1, true)?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
