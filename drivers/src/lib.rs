@@ -53,6 +53,8 @@
 pub mod a1;
 pub mod bus;
 pub mod conformance;
+pub mod imu;
+pub mod sim;
 pub mod sim_bus;
 pub mod socketcan_bus;
 pub mod timing;

@@ -1,0 +1,343 @@
+//! The contact solver: the model's `D(q)`, `H(q, q̇)` reduced to the coordinates that move (the
+//! design joints are rigid, so their rows and columns drop out: the same as the model's
+//! `q̈_D = 0` constraint rows), then point-foot constraints by a Schur complement.
+//!
+//! Every use is one projection: given an unconstrained `w` and target `c` for `J x`, find
+//! `x = w + D⁻¹ Jᵀ λ` with `J x = c`. That is the stance dynamics (`w = D⁻¹(Bu − H)`,
+//! `c = −J̇q̇`, λ = contact force), the plastic impact (`w = q̇⁻`, `c = 0`, λ = impulse) and
+//! the drift corrections (velocity: `w = q̇`, `c = 0`; position: `w = 0`, `c = −error`), all in
+//! the kinetic-energy metric. Buffers are sized once; nothing here allocates.
+
+use model::kinematics::BodyStates;
+use model::PlanarModel;
+use nalgebra::DMatrix;
+
+/// Most simultaneous contact points (two point feet).
+pub const MAX_CONTACTS: usize = 2;
+const MAX_ROWS: usize = 2 * MAX_CONTACTS;
+
+/// Relative Tikhonov term on the contact Schur complement, so that a singular contact
+/// Jacobian (a straight knee with both feet pinned) still gives a (least-squares) answer.
+const SCHUR_REGULARIZATION: f64 = 1e-12;
+
+/// The Cholesky factorization failed: `D` is not positive definite (a massless chain).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NotPositiveDefinite;
+
+/// Preallocated workspace of the reduced constrained dynamics.
+#[derive(Debug, Clone)]
+pub struct Solver {
+    /// Coordinates that move (all but the design joints), ascending.
+    free: Vec<usize>,
+    /// Cholesky factor L of D_r (row-major, lower triangle used).
+    chol: Vec<f64>,
+    /// Contact Jacobian rows restricted to `free` (row-major, `rows × n_r`).
+    jac: Vec<f64>,
+    /// D_r⁻¹ Jᵀ, stored as rows (`rows × n_r`).
+    y: Vec<f64>,
+    /// Cholesky factor of the Schur complement J D_r⁻¹ Jᵀ.
+    schur: [[f64; MAX_ROWS]; MAX_ROWS],
+    rows: usize,
+}
+
+impl Solver {
+    /// A workspace for `model`.
+    pub fn new(model: &PlanarModel) -> Self {
+        let design: Vec<usize> = model
+            .design_joints()
+            .iter()
+            .map(|&j| model.joints[j].coordinate)
+            .collect();
+        let free: Vec<usize> = (0..model.dof()).filter(|c| !design.contains(c)).collect();
+        let n = free.len();
+        Self {
+            chol: vec![0.0; n * n],
+            jac: vec![0.0; MAX_ROWS * n],
+            y: vec![0.0; MAX_ROWS * n],
+            schur: [[0.0; MAX_ROWS]; MAX_ROWS],
+            rows: 0,
+            free,
+        }
+    }
+
+    /// The coordinates that move.
+    pub fn free(&self) -> &[usize] {
+        &self.free
+    }
+
+    /// Number of coordinates that move.
+    pub fn len(&self) -> usize {
+        self.free.len()
+    }
+
+    /// Factor the reduced mass matrix `D_r` of the full `D`.
+    pub fn factor_mass(&mut self, d: &DMatrix<f64>) -> Result<(), NotPositiveDefinite> {
+        let n = self.free.len();
+        for (i, &ci) in self.free.iter().enumerate() {
+            for (k, &ck) in self.free.iter().enumerate() {
+                self.chol[i * n + k] = d[(ci, ck)];
+            }
+        }
+        cholesky(&mut self.chol, n)
+    }
+
+    /// `x ← D_r⁻¹ x` in place (`x` in reduced coordinates).
+    pub fn solve_mass(&self, x: &mut [f64]) {
+        cholesky_solve(&self.chol, self.free.len(), x);
+    }
+
+    /// Load the Jacobians of `frames` at the body states `st` and factor the Schur complement.
+    pub fn set_contacts(&mut self, model: &PlanarModel, st: &BodyStates<f64>, frames: &[usize]) {
+        let n = self.free.len();
+        self.rows = 2 * frames.len().min(MAX_CONTACTS);
+        self.jac[..self.rows * n].fill(0.0);
+        let free = &self.free;
+        let jac = &mut self.jac;
+        for (k, &frame) in frames.iter().take(MAX_CONTACTS).enumerate() {
+            let p = model.frame_position_in(st, frame);
+            model.point_jacobian_into(st, model.frames[frame].body, p, |r, c, v| {
+                if let Ok(i) = free.binary_search(&c) {
+                    jac[(2 * k + r) * n + i] = v;
+                }
+            });
+        }
+        for r in 0..self.rows {
+            let (row, y) = (
+                &self.jac[r * n..(r + 1) * n],
+                &mut self.y[r * n..(r + 1) * n],
+            );
+            y.copy_from_slice(row);
+            cholesky_solve(&self.chol, n, y);
+        }
+        let mut trace = 0.0;
+        for a in 0..self.rows {
+            for b in 0..=a {
+                let v = dot(&self.jac[a * n..(a + 1) * n], &self.y[b * n..(b + 1) * n]);
+                self.schur[a][b] = v;
+                self.schur[b][a] = v;
+            }
+            trace += self.schur[a][a];
+        }
+        let eps = SCHUR_REGULARIZATION * trace.max(f64::MIN_POSITIVE);
+        let mut flat = [0.0; MAX_ROWS * MAX_ROWS];
+        for a in 0..self.rows {
+            for b in 0..self.rows {
+                flat[a * self.rows + b] = self.schur[a][b] + if a == b { eps } else { 0.0 };
+            }
+        }
+        // Positive definite by construction (regularized).
+        let _ = cholesky(&mut flat[..self.rows * self.rows], self.rows);
+        for a in 0..self.rows {
+            for b in 0..self.rows {
+                self.schur[a][b] = flat[a * self.rows + b];
+            }
+        }
+    }
+
+    /// `J x` for the loaded contacts (`x` reduced), into `out[..rows]`.
+    pub fn jacobian_times(&self, x: &[f64], out: &mut [f64; MAX_ROWS]) {
+        let n = self.free.len();
+        for (r, o) in out.iter_mut().enumerate().take(self.rows) {
+            *o = dot(&self.jac[r * n..(r + 1) * n], x);
+        }
+    }
+
+    /// Project: `w ← w + D⁻¹Jᵀλ` with `J w = c` afterwards; writes λ (one per row).
+    pub fn constrain(&self, w: &mut [f64], c: &[f64; MAX_ROWS], lambda: &mut [f64; MAX_ROWS]) {
+        let rows = self.rows;
+        let n = self.free.len();
+        let mut jw = [0.0; MAX_ROWS];
+        self.jacobian_times(w, &mut jw);
+        let mut flat = [0.0; MAX_ROWS * MAX_ROWS];
+        for a in 0..rows {
+            lambda[a] = c[a] - jw[a];
+            for b in 0..rows {
+                flat[a * rows + b] = self.schur[a][b];
+            }
+        }
+        cholesky_solve(&flat[..rows * rows], rows, &mut lambda[..rows]);
+        for (r, l) in lambda.iter().enumerate().take(rows) {
+            for (wi, yi) in w.iter_mut().zip(&self.y[r * n..(r + 1) * n]) {
+                *wi += yi * l;
+            }
+        }
+    }
+
+    /// Gather full coordinates into reduced ones.
+    pub fn gather(&self, full: &[f64], reduced: &mut [f64]) {
+        for (r, &c) in reduced.iter_mut().zip(&self.free) {
+            *r = full[c];
+        }
+    }
+
+    /// `full[free[i]] += scale · reduced[i]`.
+    pub fn scatter_add(&self, reduced: &[f64], scale: f64, full: &mut [f64]) {
+        for (&r, &c) in reduced.iter().zip(&self.free) {
+            full[c] += scale * r;
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// In-place Cholesky `A = L Lᵀ` of a row-major `n × n` matrix (lower triangle holds L).
+fn cholesky(a: &mut [f64], n: usize) -> Result<(), NotPositiveDefinite> {
+    for j in 0..n {
+        let mut d = a[j * n + j];
+        for k in 0..j {
+            d -= a[j * n + k] * a[j * n + k];
+        }
+        if d.is_nan() || d <= 0.0 {
+            return Err(NotPositiveDefinite);
+        }
+        let d = d.sqrt();
+        a[j * n + j] = d;
+        for i in j + 1..n {
+            let mut s = a[i * n + j];
+            for k in 0..j {
+                s -= a[i * n + k] * a[j * n + k];
+            }
+            a[i * n + j] = s / d;
+        }
+    }
+    Ok(())
+}
+
+/// Solve `L Lᵀ x = b` in place.
+fn cholesky_solve(l: &[f64], n: usize, x: &mut [f64]) {
+    for i in 0..n {
+        let mut s = x[i];
+        for k in 0..i {
+            s -= l[i * n + k] * x[k];
+        }
+        x[i] = s / l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut s = x[i];
+        for k in i + 1..n {
+            s -= l[k * n + i] * x[k];
+        }
+        x[i] = s / l[i * n + i];
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::needless_range_loop)]
+mod tests {
+    use super::*;
+
+    fn adam() -> PlanarModel {
+        model::design::generate_model(&model::design::DesignLengths::ADAM)
+            .unwrap()
+            .0
+    }
+
+    /// A bent-knee pose with some velocity, both feet near the ground.
+    fn state(m: &PlanarModel) -> (Vec<f64>, Vec<f64>) {
+        let mut q = m.nominal_pose().unwrap();
+        let legs = m.legs().unwrap();
+        for (j, v) in [
+            (legs.left.hip, -0.4),
+            (legs.left.knee, 0.7),
+            (legs.right.hip, 0.1),
+            (legs.right.knee, 0.3),
+        ] {
+            q[m.joints[j].coordinate] = v;
+        }
+        q[2] = 0.05;
+        let mut dq = vec![0.0; m.dof()];
+        for (c, v) in [(0, 0.3), (1, -0.2), (2, 0.4)] {
+            dq[c] = v;
+        }
+        dq[m.joints[legs.left.hip].coordinate] = 1.1;
+        dq[m.joints[legs.right.knee].coordinate] = -0.8;
+        (q, dq)
+    }
+
+    #[test]
+    fn stance_dynamics_match_the_model() {
+        // Independent path: the model's full saddle-point solve with design rows.
+        let m = adam();
+        let (q, dq) = state(&m);
+        let legs = m.legs().unwrap();
+        let u = [3.0, -2.0, 5.0, 1.0];
+        for frames in [
+            vec![],
+            vec![legs.left.foot],
+            vec![legs.left.foot, legs.right.foot],
+        ] {
+            let reference = m.constrained_dynamics(&q, &dq, &u, &frames).unwrap();
+            let mut s = Solver::new(&m);
+            let dy = m.dynamics(&q, &dq).unwrap();
+            s.factor_mass(&dy.mass_matrix).unwrap();
+            let bu = m.generalized_forces(&u).unwrap();
+            let full: Vec<f64> = (0..m.dof()).map(|i| bu[i] - dy.drift[i]).collect();
+            let mut acc = vec![0.0; s.len()];
+            s.gather(&full, &mut acc);
+            s.solve_mass(&mut acc);
+            let st = m.body_states(&q, &dq).unwrap();
+            s.set_contacts(&m, &st, &frames);
+            let mut c = [0.0; MAX_ROWS];
+            for (k, &f) in frames.iter().enumerate() {
+                let b = m.frame_bias_acceleration_in(&st, f);
+                c[2 * k] = -b[0];
+                c[2 * k + 1] = -b[1];
+            }
+            let mut lambda = [0.0; MAX_ROWS];
+            s.constrain(&mut acc, &c, &mut lambda);
+            let mut ddq = vec![0.0; m.dof()];
+            s.scatter_add(&acc, 1.0, &mut ddq);
+            for i in 0..m.dof() {
+                assert!(
+                    (ddq[i] - reference.ddq[i]).abs() < 1e-8 * (1.0 + reference.ddq[i].abs()),
+                    "{frames:?} coordinate {i}: {} vs {}",
+                    ddq[i],
+                    reference.ddq[i]
+                );
+            }
+            for (k, f) in reference.forces_n.iter().enumerate() {
+                for r in 0..2 {
+                    assert!((lambda[2 * k + r] - f[r]).abs() < 1e-7 * (1.0 + f[r].abs()));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn impact_matches_the_model() {
+        let m = adam();
+        let (q, dq) = state(&m);
+        let legs = m.legs().unwrap();
+        let reference = m.impact(&q, &dq, legs.right.foot).unwrap();
+        let mut s = Solver::new(&m);
+        let dy = m.dynamics(&q, &dq).unwrap();
+        s.factor_mass(&dy.mass_matrix).unwrap();
+        let st = m.body_poses(&q).unwrap();
+        s.set_contacts(&m, &st, &[legs.right.foot]);
+        let mut v = vec![0.0; s.len()];
+        s.gather(&dq, &mut v);
+        let mut lambda = [0.0; MAX_ROWS];
+        s.constrain(&mut v, &[0.0; MAX_ROWS], &mut lambda);
+        let mut dq_plus = vec![0.0; m.dof()];
+        s.scatter_add(&v, 1.0, &mut dq_plus);
+        for i in 0..m.dof() {
+            assert!((dq_plus[i] - reference.dq_plus[i]).abs() < 1e-9, "{i}");
+        }
+        assert!((lambda[0] - reference.impulse_ns[0]).abs() < 1e-9);
+        assert!((lambda[1] - reference.impulse_ns[1]).abs() < 1e-9);
+    }
+
+    #[test]
+    fn cholesky_solves_a_known_system() {
+        let mut a = [4.0, 2.0, 2.0, 3.0];
+        cholesky(&mut a, 2).unwrap();
+        let mut x = [2.0, 1.0];
+        cholesky_solve(&a, 2, &mut x);
+        // [4 2; 2 3] x = [2; 1] → x = [0.5, 0].
+        assert!((x[0] - 0.5).abs() < 1e-15 && x[1].abs() < 1e-15);
+        let mut bad = [1.0, 2.0, 2.0, 1.0];
+        assert_eq!(cholesky(&mut bad, 2), Err(NotPositiveDefinite));
+    }
+}
