@@ -11,6 +11,8 @@
 //! | [`bus`] | the [`bus::MotorBus`] trait: configure → activate → exchange → deactivate, `Drop` = damping |
 //! | [`socketcan_bus`] | `MotorBus` on Linux SocketCAN, one interface per limb |
 //! | [`sim_bus`] | `MotorBus` on simulated A1 firmware and a pluggable [`sim_bus::JointPlant`] |
+//! | [`sim`] | the planar ADAM on a treadmill (optional boom): point-foot contact, impacts, falls, ground truth; a `JointPlant` |
+//! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force) and a seeded noise model |
 //! | [`conformance`] | the checks every `MotorBus` must pass |
 //!
 //! ## Data flow of one control cycle
@@ -19,10 +21,21 @@
 //!                                                                              │
 //!            SocketCanBus: write to can0..can3 ◀──────────────────────────────┤
 //!            SimBus: simulated firmware decodes, runs PD at 10 kHz on the JointPlant
+//!                    JointPlant = sim::RobotSim: 4 leg joints (hip, knee ×2) of the planar
+//!                    ADAM; D(q), H from `model`; stance/flight/impact at 10 kHz ──▶ ground truth,
+//!                    events (touchdown, liftoff, fall), Imu::read (noisy pitch rate, accel)
 //!                                                                              │
 //! controller ◀── &mut [Reply] ◀── a1::decode_reply ◀── reply frames ◀──────────┘
 //! ```
-//! Nothing in `exchange` allocates; the caller sizes the command and reply slices once.
+//! Nothing in `exchange` allocates with the test plants; with [`sim::RobotSim`] each 10 kHz
+//! step allocates inside `model::PlanarModel::dynamics` (a simulator, not the control tick).
+//! The caller sizes the command and reply slices once.
+//!
+//! With `SimBus<RobotSim>`, configure only the four simulated leg motors
+//! ([`sim::RobotSim::leg_motors`]). ADAM's other ten motors (hip yaw/roll, arms) have no joint
+//! in the planar model (their mass is lumped into the torso): a `SimBus` has no firmware for
+//! them, so naming one in `configure` makes `activate` fail with `MissingReply` for it, exactly
+//! like an unplugged motor.
 //! Time is an argument (`budget`); only `SocketCanBus` reads the clock.
 //!
 //! ## Example
