@@ -1,0 +1,2 @@
+//! Tick compute time (placeholder, filled below).
+fn main() {}
