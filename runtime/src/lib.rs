@@ -7,8 +7,10 @@ pub mod controller;
 mod error;
 pub mod estimator;
 pub mod io;
+pub mod log;
 pub mod operator;
 pub mod safety;
+pub mod telemetry;
 
 pub use error::{Result, RuntimeError};
 pub use io::{Imu, ImuSample};
