@@ -9,6 +9,8 @@ pub mod estimator;
 pub mod io;
 pub mod log;
 pub mod operator;
+pub mod rt_loop;
+mod rt_sys;
 pub mod safety;
 pub mod telemetry;
 
