@@ -1,6 +1,59 @@
 //! # runtime: real-time execution of an HZD gait on ADAM
 //!
-//! (crate docs: see below)
+//! Stands on [`model`] (kinematics, Bézier outputs, gait files) and [`drivers`] (the
+//! [`drivers::bus::MotorBus`] trait, A1 codec, bus timing). It runs a planned gait on the
+//! robot or on a simulated backend, at 1 kHz, with a safety monitor, zero-copy telemetry and
+//! MCAP logs.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints |
+//! | [`controller`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine |
+//! | [`estimator`] | torso pitch Kalman filter with gyro-bias estimation |
+//! | [`safety`] | per-tick checks; a [`safety::Trip`] (small `Copy` enum) sends the controller to Damping |
+//! | [`operator`] | operator commands into the loop: SPSC ring + latching e-stop flag, never blocks |
+//! | [`io`] | the [`Imu`] trait and [`io::WithImu`] (pair a bus with an IMU) |
+//! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
+//! | [`telemetry`] | `#[repr(C)]` [`telemetry::StateSample`], published over iceoryx2 (feature `iceoryx2`, default) |
+//! | [`log`] | MCAP writer thread fed by a wait-free queue; drops counted |
+//!
+//! ## Data flow of one tick
+//! ```text
+//!  MotorBus::exchange(last commands) ─▶ replies ─┐
+//!  Imu::read_imu(t) ─────────────────────────────┤         operator ring / e-stop flag / script
+//!                                                ▼                      │
+//!  Controller::tick(TickInput{t, motors[14], imu, operator, overruns}) ◀┘
+//!    ├─ PitchEstimator (θ̂, b̂)      ├─ SafetyMonitor ─ trip ─▶ Damping (latched)
+//!    ├─ state machine: Idle → Ramp → Stand → Walk → Stop → Stand …  → Damping
+//!    └─ Walk: θ(q) → τ, τ̇ → y^d(τ), ẏ^d → stance switch (τ ≥ 1 ∧ foot down, debounced)
+//!  TickOutput{commands[14], status} ─▶ next exchange
+//!                                   └▶ StateSample ─▶ iceoryx2 publisher (zero-copy)
+//!                                                   └▶ rtrb queue ─▶ writer thread ─▶ MCAP (zstd)
+//! ```
+//! Only [`rt_loop`] reads a clock; the controller, estimator and safety monitor take time as
+//! an argument, allocate nothing and take no lock in the tick.
+//!
+//! ## Example
+//! ```no_run
+//! use runtime::controller::OperatorCommand;
+//! use runtime::io::{StaticImu, WithImu};
+//! use runtime::rt_loop::{LoopOptions, SimulatedClock};
+//! use runtime::Setup;
+//! # fn backend() -> WithImu<drivers::sim_bus::SimBus<drivers::sim_bus::InertiaDampingPlant>, StaticImu> { unimplemented!() }
+//!
+//! # fn main() -> runtime::Result<()> {
+//! let setup = Setup::load("configs/runtime/adam.toml", "configs/gaits/adam_walk.json")?;
+//! // Any MotorBus + Imu: a SimBus paired with an IMU here; SocketCanBus + IMU on the robot.
+//! let backend = backend();
+//! let mut options = LoopOptions::simulation(10.0);
+//! options.script = vec![(0.1, OperatorCommand::Start), (3.0, OperatorCommand::Walk)];
+//! options.log_path = Some("logs/sim.mcap".into());
+//! let (summary, _backend) = runtime::run(&setup, backend, SimulatedClock::default(), options, None)?;
+//! println!("{:?} after {} ticks, tick p99 {} ns", summary.final_state, summary.ticks,
+//!          summary.tick_times.p99_ns);
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod config;
 pub mod controller;
@@ -16,6 +69,7 @@ pub mod telemetry;
 
 pub use error::{Result, RuntimeError};
 pub use io::{Imu, ImuSample};
+pub use rt_loop::{run, LoopOptions, RunSummary};
 
 /// Everything [`run`] needs besides the backend: config, gait and robot model, loaded and
 /// cross-checked.

@@ -26,6 +26,8 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 
 /// One record from the control thread to the writer.
+// Samples dominate the queue; boxing them would allocate in the control thread.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LogRecord {
     /// The per-tick sample.
