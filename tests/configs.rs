@@ -31,6 +31,26 @@ fn every_config_file_loads_and_validates() {
             Some("json") => {
                 model::gait::GaitFile::load(path).unwrap_or_else(|e| panic!("{e}"));
             }
+            Some("toml") => {
+                let folder = path
+                    .parent()
+                    .and_then(|p| p.file_name())
+                    .and_then(|f| f.to_str());
+                match folder {
+                    Some("runtime") => {
+                        runtime::config::RuntimeConfig::load(path)
+                            .unwrap_or_else(|e| panic!("{e}"));
+                    }
+                    Some("planner") => {
+                        planner::config::PlannerConfig::load(path)
+                            .unwrap_or_else(|e| panic!("{e}"));
+                    }
+                    _ => panic!(
+                        "{}: TOML outside configs/runtime/ or configs/planner/; add a loader",
+                        path.display()
+                    ),
+                }
+            }
             _ => panic!(
                 "{}: no loader for this kind of file; add one to this test",
                 path.display()

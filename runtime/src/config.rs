@@ -1,0 +1,558 @@
+//! The runtime config (`configs/runtime/*.toml`): loop rate, buses, motors, gains, ramp,
+//! safety limits, held joint positions, logging and telemetry.
+//!
+//! Checked data: `deny_unknown_fields` everywhere, a `schema_version`, and [`RuntimeConfig::validate`]
+//! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
+//! [`drivers::timing::validate`] refuses, naming the file, the field and the value.
+
+use crate::controller::{LEG_SLOTS, MAX_HELD};
+use crate::{Result, RuntimeError};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The schema version this build reads.
+pub const RUNTIME_CONFIG_VERSION: u32 = 1;
+
+/// How the phase variable τ is computed at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PhaseSource {
+    /// τ from the stance-leg angle θ(q) with the gait's θ⁺/θ⁻ (HZD, time-invariant).
+    StateBased,
+    /// τ = (t − t_step) / T with the gait's step duration.
+    TimeBased,
+}
+
+/// Loop timing and CAN layout.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LoopConfig {
+    /// Control rate, Hz.
+    pub rate_hz: f64,
+    /// CAN bitrate of every bus, bit/s.
+    pub bitrate_bps: u32,
+    /// Number of CAN buses; `motors[*].bus` indexes them.
+    pub bus_count: usize,
+    /// Consecutive overruns that trip the safety monitor.
+    pub max_overrun_streak: u32,
+    /// SCHED_FIFO priority to request (1..=99); 0 = do not ask.
+    pub fifo_priority: i32,
+    /// Lock memory with `mlockall` (a warning when not permitted).
+    pub lock_memory: bool,
+}
+
+/// One motor: where it is on the CAN buses and how its shaft maps to the model joint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotorConfig {
+    /// Joint name (URDF name for leg joints, free text for held joints).
+    pub joint: String,
+    /// Bus index, `0..bus_count`.
+    pub bus: usize,
+    /// A1 motor id on that bus (1..=127, unique over all buses).
+    pub id: u8,
+    /// +1 or −1: model joint angle = direction · motor angle + offset.
+    #[serde(default = "one")]
+    pub direction: f64,
+    /// Offset of the model joint angle at motor zero, rad.
+    #[serde(default)]
+    pub offset_rad: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A joint outside the planar model, held still at a configured position.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeldJointConfig {
+    /// The motor.
+    pub motor: MotorConfig,
+    /// Held position (motor side), rad.
+    pub position_rad: f64,
+    /// Stiffness, N·m/rad.
+    pub kp_nm_per_rad: f64,
+    /// Damping, N·m·s/rad.
+    pub kd_nm_s_per_rad: f64,
+    /// Largest deviation from `position_rad` before the safety monitor trips, rad.
+    pub tolerance_rad: f64,
+}
+
+/// PD gains of the four leg joints, in slot order (left hip, left knee, right hip, right knee).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GainsConfig {
+    /// Stiffness per leg slot, N·m/rad.
+    pub kp_nm_per_rad: [f64; LEG_SLOTS],
+    /// Damping per leg slot, N·m·s/rad.
+    pub kd_nm_s_per_rad: [f64; LEG_SLOTS],
+    /// Constant feed-forward torque per output (stance hip, stance knee, swing hip, swing
+    /// knee) while walking, N·m.
+    pub walk_feedforward_nm: [f64; LEG_SLOTS],
+    /// Damping gain in the Idle and Damping states, N·m·s/rad.
+    pub damping_kd_nm_s_per_rad: f64,
+}
+
+/// Idle → Ramp → Stand: the move from the measured pose to the gait's first pose.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RampConfig {
+    /// Shortest ramp duration, s.
+    pub min_duration_s: f64,
+    /// Highest joint speed of the ramp, rad/s (lengthens the ramp for large moves).
+    pub max_speed_rad_s: f64,
+}
+
+/// Walking: phase and stance switching.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WalkConfig {
+    /// State-based (HZD) or time-based phase.
+    pub phase: PhaseSource,
+    /// τ at or above which a touchdown may switch the stance leg (1.0 = end of the step).
+    pub switch_min_phase: f64,
+    /// Swing foot height above the stance foot below which the foot counts as down, m.
+    pub touchdown_height_m: f64,
+    /// Consecutive ticks the touchdown condition must hold.
+    pub touchdown_debounce_ticks: u32,
+    /// Largest |τ̇| used for ẏ^d, 1/s (guards the velocity reference against gyro spikes).
+    pub max_phase_rate_per_s: f64,
+}
+
+/// Torso pitch estimator (see [`crate::estimator`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EstimatorConfig {
+    /// Gyro white noise, rad/s (per sample).
+    pub gyro_noise_rad_s: f64,
+    /// Gyro bias random walk, rad/s per √s.
+    pub gyro_bias_walk_rad_s_per_sqrt_s: f64,
+    /// Accelerometer pitch noise, rad.
+    pub accel_pitch_noise_rad: f64,
+    /// Skip the accelerometer update when | ‖a‖ − g | exceeds this, m/s².
+    pub accel_gate_mps2: f64,
+}
+
+/// Safety limits (see [`crate::safety`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SafetyConfig {
+    /// Lower joint limit per leg slot (model side), rad.
+    pub joint_lower_rad: [f64; LEG_SLOTS],
+    /// Upper joint limit per leg slot (model side), rad.
+    pub joint_upper_rad: [f64; LEG_SLOTS],
+    /// |τ| at or above which a motor counts as saturated, N·m.
+    pub torque_saturation_nm: f64,
+    /// Consecutive saturated ticks that trip.
+    pub torque_saturation_ticks: u32,
+    /// |torso pitch| beyond which the robot is falling, rad.
+    pub max_pitch_rad: f64,
+    /// Motor winding temperature that trips, °C.
+    pub max_temperature_c: f64,
+    /// Consecutive missing replies of one motor that trip.
+    pub max_missing_replies: u32,
+    /// Oldest IMU sample accepted, s.
+    pub max_imu_age_s: f64,
+    /// Largest plausible |gyro|, rad/s.
+    pub max_gyro_rad_s: f64,
+    /// Plausible accelerometer norm range, m/s².
+    pub accel_norm_range_mps2: [f64; 2],
+}
+
+/// MCAP logging and zero-copy telemetry.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TelemetryConfig {
+    /// Capacity of the tick → logger queue, samples (drops are counted when full).
+    pub log_queue_capacity: usize,
+    /// Log every n-th tick (1 = every tick).
+    pub log_every_n_ticks: u32,
+    /// zstd chunk compression for MCAP.
+    pub log_zstd: bool,
+    /// iceoryx2 service name of the per-tick state sample; empty = do not publish.
+    pub service_name: String,
+}
+
+/// The runtime config.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RuntimeConfig {
+    /// Must equal [`RUNTIME_CONFIG_VERSION`].
+    pub schema_version: u32,
+    /// Loop rate and buses.
+    #[serde(rename = "loop")]
+    pub loop_: LoopConfig,
+    /// The four leg motors, in slot order: left hip, left knee, right hip, right knee. Their
+    /// `joint` must be the URDF joint names `left_hip_pitch`, `left_knee_pitch`, ...
+    pub leg_motors: [MotorConfig; LEG_SLOTS],
+    /// Up to ten held joints (hip yaw/roll, arms); may be absent in simulation.
+    #[serde(default)]
+    pub held: Vec<HeldJointConfig>,
+    /// PD gains.
+    pub gains: GainsConfig,
+    /// Ramp to the first pose.
+    pub ramp: RampConfig,
+    /// Walking.
+    pub walk: WalkConfig,
+    /// Torso pitch estimator.
+    pub estimator: EstimatorConfig,
+    /// Safety monitor.
+    pub safety: SafetyConfig,
+    /// Logging and telemetry.
+    pub telemetry: TelemetryConfig,
+}
+
+/// The URDF joint of each leg slot.
+pub const LEG_JOINT_NAMES: [&str; LEG_SLOTS] = [
+    "left_hip_pitch",
+    "left_knee_pitch",
+    "right_hip_pitch",
+    "right_knee_pitch",
+];
+
+impl RuntimeConfig {
+    /// Reads and validates a runtime config; errors name the file and the field.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|error| RuntimeError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Parses and validates TOML; `origin` names the source in errors.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self> {
+        let raw: toml::Value = toml::from_str(text).map_err(|e| RuntimeError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        let version = raw.get("schema_version").and_then(|v| v.as_integer());
+        if version != Some(i64::from(RUNTIME_CONFIG_VERSION)) {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "schema_version".into(),
+                value: format!("{version:?}"),
+                reason: format!("this build reads runtime schema version {RUNTIME_CONFIG_VERSION}"),
+            });
+        }
+        let config: Self = toml::from_str(text).map_err(|e| RuntimeError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        config.validate(origin)?;
+        Ok(config)
+    }
+
+    /// The config as TOML text (for the log attachment).
+    pub fn to_toml(&self) -> String {
+        toml::to_string_pretty(self).unwrap_or_default()
+    }
+
+    /// Control period, s.
+    pub fn period_s(&self) -> f64 {
+        1.0 / self.loop_.rate_hz
+    }
+
+    /// Rejects NaN/inf, out-of-range values, duplicate ids and overloaded buses.
+    pub fn validate(&self, origin: &str) -> Result<()> {
+        let bad = |field: &str, value: String, reason: &str| RuntimeError::InvalidField {
+            origin: origin.to_string(),
+            field: field.to_string(),
+            value,
+            reason: reason.to_string(),
+        };
+        let finite = |field: &str, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "must be finite"))
+            }
+        };
+        let positive = |field: &str, v: f64| {
+            finite(field, v)?;
+            if v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "must be positive"))
+            }
+        };
+        let non_negative = |field: &str, v: f64| {
+            finite(field, v)?;
+            if v >= 0.0 {
+                Ok(())
+            } else {
+                Err(bad(field, v.to_string(), "must not be negative"))
+            }
+        };
+        if self.schema_version != RUNTIME_CONFIG_VERSION {
+            return Err(bad(
+                "schema_version",
+                self.schema_version.to_string(),
+                "unknown schema version",
+            ));
+        }
+        let l = &self.loop_;
+        positive("loop.rate_hz", l.rate_hz)?;
+        if l.bus_count == 0 || l.bus_count > drivers::sim_bus::MAX_BUSES {
+            return Err(bad(
+                "loop.bus_count",
+                l.bus_count.to_string(),
+                "must be in 1..=8",
+            ));
+        }
+        if !(0..=99).contains(&l.fifo_priority) {
+            return Err(bad(
+                "loop.fifo_priority",
+                l.fifo_priority.to_string(),
+                "must be 0 (off) or 1..=99",
+            ));
+        }
+        if l.max_overrun_streak == 0 {
+            return Err(bad("loop.max_overrun_streak", "0".into(), "must be ≥ 1"));
+        }
+        if self.held.len() > MAX_HELD {
+            return Err(bad(
+                "held",
+                format!("{} entries", self.held.len()),
+                "at most 10 held joints",
+            ));
+        }
+        // Motors: ids unique, buses exist, names of the leg joints, per-bus load.
+        let motors: Vec<(String, &MotorConfig)> = self
+            .leg_motors
+            .iter()
+            .enumerate()
+            .map(|(i, m)| (format!("leg_motors[{i}]"), m))
+            .chain(
+                self.held
+                    .iter()
+                    .enumerate()
+                    .map(|(i, h)| (format!("held[{i}].motor"), &h.motor)),
+            )
+            .collect();
+        for (i, (field, m)) in motors.iter().enumerate() {
+            if m.id == 0 || m.id > drivers::a1::codec::MAX_MOTOR_ID {
+                return Err(bad(
+                    &format!("{field}.id"),
+                    m.id.to_string(),
+                    "must be 1..=127",
+                ));
+            }
+            if m.bus >= l.bus_count {
+                return Err(bad(
+                    &format!("{field}.bus"),
+                    m.bus.to_string(),
+                    &format!("loop.bus_count is {}", l.bus_count),
+                ));
+            }
+            if motors[..i].iter().any(|(_, o)| o.id == m.id) {
+                return Err(bad(&format!("{field}.id"), m.id.to_string(), "used twice"));
+            }
+            if m.direction != 1.0 && m.direction != -1.0 {
+                return Err(bad(
+                    &format!("{field}.direction"),
+                    m.direction.to_string(),
+                    "must be 1 or -1",
+                ));
+            }
+            finite(&format!("{field}.offset_rad"), m.offset_rad)?;
+        }
+        for (i, (m, name)) in self.leg_motors.iter().zip(LEG_JOINT_NAMES).enumerate() {
+            if m.joint != name {
+                return Err(bad(
+                    &format!("leg_motors[{i}].joint"),
+                    format!("{:?}", m.joint),
+                    &format!("slot {i} is {name}"),
+                ));
+            }
+        }
+        for bus in 0..l.bus_count {
+            let count = motors.iter().filter(|(_, m)| m.bus == bus).count();
+            if count > 0 {
+                drivers::timing::validate(l.rate_hz, count, l.bitrate_bps).map_err(|e| {
+                    bad(
+                        "loop.rate_hz",
+                        l.rate_hz.to_string(),
+                        &format!("bus {bus} carries {count} motors: {e}"),
+                    )
+                })?;
+            }
+        }
+        for (i, h) in self.held.iter().enumerate() {
+            finite(&format!("held[{i}].position_rad"), h.position_rad)?;
+            non_negative(&format!("held[{i}].kp_nm_per_rad"), h.kp_nm_per_rad)?;
+            non_negative(&format!("held[{i}].kd_nm_s_per_rad"), h.kd_nm_s_per_rad)?;
+            positive(&format!("held[{i}].tolerance_rad"), h.tolerance_rad)?;
+        }
+        let g = &self.gains;
+        for k in 0..LEG_SLOTS {
+            let kp = g.kp_nm_per_rad[k];
+            let kd = g.kd_nm_s_per_rad[k];
+            non_negative(&format!("gains.kp_nm_per_rad[{k}]"), kp)?;
+            non_negative(&format!("gains.kd_nm_s_per_rad[{k}]"), kd)?;
+            if kp > drivers::a1::codec::KP_MAX_NM_PER_RAD {
+                return Err(bad(
+                    &format!("gains.kp_nm_per_rad[{k}]"),
+                    kp.to_string(),
+                    "above the A1 maximum 500",
+                ));
+            }
+            if kd > drivers::a1::codec::KD_MAX_NM_S_PER_RAD {
+                return Err(bad(
+                    &format!("gains.kd_nm_s_per_rad[{k}]"),
+                    kd.to_string(),
+                    "above the A1 maximum 10",
+                ));
+            }
+            finite(
+                &format!("gains.walk_feedforward_nm[{k}]"),
+                g.walk_feedforward_nm[k],
+            )?;
+        }
+        non_negative("gains.damping_kd_nm_s_per_rad", g.damping_kd_nm_s_per_rad)?;
+        non_negative("ramp.min_duration_s", self.ramp.min_duration_s)?;
+        positive("ramp.max_speed_rad_s", self.ramp.max_speed_rad_s)?;
+        let w = &self.walk;
+        positive("walk.switch_min_phase", w.switch_min_phase)?;
+        non_negative("walk.touchdown_height_m", w.touchdown_height_m)?;
+        positive("walk.max_phase_rate_per_s", w.max_phase_rate_per_s)?;
+        if w.touchdown_debounce_ticks == 0 {
+            return Err(bad(
+                "walk.touchdown_debounce_ticks",
+                "0".into(),
+                "must be ≥ 1",
+            ));
+        }
+        let e = &self.estimator;
+        positive("estimator.gyro_noise_rad_s", e.gyro_noise_rad_s)?;
+        non_negative(
+            "estimator.gyro_bias_walk_rad_s_per_sqrt_s",
+            e.gyro_bias_walk_rad_s_per_sqrt_s,
+        )?;
+        positive("estimator.accel_pitch_noise_rad", e.accel_pitch_noise_rad)?;
+        positive("estimator.accel_gate_mps2", e.accel_gate_mps2)?;
+        let s = &self.safety;
+        for k in 0..LEG_SLOTS {
+            finite(
+                &format!("safety.joint_lower_rad[{k}]"),
+                s.joint_lower_rad[k],
+            )?;
+            finite(
+                &format!("safety.joint_upper_rad[{k}]"),
+                s.joint_upper_rad[k],
+            )?;
+            if s.joint_lower_rad[k] >= s.joint_upper_rad[k] {
+                return Err(bad(
+                    &format!("safety.joint_upper_rad[{k}]"),
+                    s.joint_upper_rad[k].to_string(),
+                    "must exceed joint_lower_rad",
+                ));
+            }
+        }
+        positive("safety.torque_saturation_nm", s.torque_saturation_nm)?;
+        positive("safety.max_pitch_rad", s.max_pitch_rad)?;
+        positive("safety.max_temperature_c", s.max_temperature_c)?;
+        positive("safety.max_imu_age_s", s.max_imu_age_s)?;
+        positive("safety.max_gyro_rad_s", s.max_gyro_rad_s)?;
+        if s.torque_saturation_ticks == 0 {
+            return Err(bad(
+                "safety.torque_saturation_ticks",
+                "0".into(),
+                "must be ≥ 1",
+            ));
+        }
+        if s.max_missing_replies == 0 {
+            return Err(bad("safety.max_missing_replies", "0".into(), "must be ≥ 1"));
+        }
+        let [lo, hi] = s.accel_norm_range_mps2;
+        non_negative("safety.accel_norm_range_mps2[0]", lo)?;
+        positive("safety.accel_norm_range_mps2[1]", hi)?;
+        if lo >= hi {
+            return Err(bad(
+                "safety.accel_norm_range_mps2",
+                format!("[{lo}, {hi}]"),
+                "must be an increasing range",
+            ));
+        }
+        let t = &self.telemetry;
+        if t.log_queue_capacity < 16 {
+            return Err(bad(
+                "telemetry.log_queue_capacity",
+                t.log_queue_capacity.to_string(),
+                "must be ≥ 16",
+            ));
+        }
+        if t.log_every_n_ticks == 0 {
+            return Err(bad(
+                "telemetry.log_every_n_ticks",
+                "0".into(),
+                "must be ≥ 1",
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn shipped() -> String {
+        std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../configs/runtime/adam.toml"
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn shipped_config_loads_with_14_motors_on_valid_buses() {
+        let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
+        assert_eq!(c.leg_motors.len() + c.held.len(), 14);
+        assert_eq!(c.loop_.rate_hz, 1000.0);
+    }
+
+    #[test]
+    fn errors_name_field_and_value() {
+        let text = shipped().replace("rate_hz = 1000.0", "rate_hz = 1500.0");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("x.toml") && e.contains("loop.rate_hz") && e.contains("1500"),
+            "{e}"
+        );
+        let text = shipped().replace("schema_version = 1", "schema_version = 9");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("schema_version"), "{e}");
+        let text = shipped().replace("max_pitch_rad = 0.6", "max_pitch_rad = nan");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("safety.max_pitch_rad") && e.contains("NaN"),
+            "{e}"
+        );
+        let text = shipped().replace("[telemetry]", "[telemetry]\nbogus = 1");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bogus"), "{e}");
+    }
+
+    #[test]
+    fn four_motors_on_one_bus_are_refused_at_1_khz() {
+        let mut c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
+        c.held.clear();
+        for m in c.leg_motors.iter_mut() {
+            m.bus = 0;
+        }
+        let e = c.validate("t").unwrap_err().to_string();
+        assert!(e.contains("bus 0 carries 4 motors"), "{e}");
+    }
+}

@@ -1,0 +1,1261 @@
+//! The controller: pure, sans-IO logic of one control tick.
+//!
+//! ```text
+//! TickInput { t_s, motor samples[14], IMU sample?, operator command?, overrun streak }
+//!   │  motor → model angles (direction, offset)        IMU → PitchEstimator (θ̂, θ̂̇, b̂)
+//!   ▼
+//! operator command → state machine (Idle → Ramp → Stand → Walk → Stop → Stand … Damping)
+//!   ▼
+//! SafetyMonitor::check ── trip? ──▶ Damping (latched, reason in Status::trip)
+//!   ▼
+//! Walk/Stop: q = [0, 0, θ̂, legs…] → θ(q), θ̇ (model::phase) → τ, τ̇ → y^d(τ), ẏ^d = y^d'(τ)·τ̇
+//!            swing-foot height + τ ≥ τ_switch, debounced → stance switch (relabel outputs)
+//! Ramp: minimum-jerk move from the measured pose to y^d(0); Stand: hold y^d(0)
+//!   ▼
+//! TickOutput { commands[14] (PD or damping, motor side), status }
+//! ```
+//! `tick` never allocates, locks, sleeps or reads a clock: time is `TickInput::t_s`.
+//!
+//! Motor slots: 0..4 are the leg joints (left hip, left knee, right hip, right knee); 4..14 the
+//! held joints of the config, in order. Slots without a motor (fewer held joints, or held
+//! motors absent in simulation) have `present == false` in the [`SlotLayout`].
+
+use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
+use crate::estimator::{EstimatorParams, PitchEstimator};
+use crate::io::ImuSample;
+use crate::safety::{SafetyInput, SafetyMonitor, Trip};
+use crate::{Result, RuntimeError};
+use model::bezier::{self, MAX_BEZIER_DEGREE};
+use model::gait::{GaitFile, PhaseDefinition};
+use model::robot::{Legs, MAX_DOF};
+use model::{PlanarModel, Side};
+
+/// Leg motor slots (hip and knee of each leg).
+pub const LEG_SLOTS: usize = 4;
+/// Most held joints.
+pub const MAX_HELD: usize = 10;
+/// All motor slots.
+pub const SLOTS: usize = LEG_SLOTS + MAX_HELD;
+/// Controlled outputs (stance hip, stance knee, swing hip, swing knee).
+pub const OUTPUTS: usize = 4;
+
+/// One motor's reply as the controller sees it (motor-side units).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MotorSample {
+    /// A reply arrived this tick (otherwise the values are the last known ones).
+    pub fresh: bool,
+    /// Position, rad.
+    pub q_rad: f64,
+    /// Velocity, rad/s.
+    pub dq_rad_s: f64,
+    /// Torque, N·m.
+    pub tau_nm: f64,
+    /// Winding temperature, °C.
+    pub temperature_c: f64,
+    /// Fault bits ([`drivers::a1::ErrorFlags`]).
+    pub errors: u8,
+}
+
+/// Operator requests, delivered through [`crate::operator`] without blocking the tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OperatorCommand {
+    /// Idle → Ramp (to the gait's first pose, then Stand).
+    Start,
+    /// Stand → Walk.
+    Walk,
+    /// Walk → Stop: finish the step, then Stand.
+    Stop,
+    /// Any → Damping, orderly (no trip).
+    Damp,
+    /// Damping → Idle, clearing a latched trip.
+    Reset,
+    /// Any → Damping with [`Trip::EStop`].
+    EStop,
+}
+
+/// State of the controller's state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum ControlState {
+    /// Motors damped, waiting for `Start`.
+    Idle = 0,
+    /// Moving smoothly to the gait's first pose.
+    Ramp = 1,
+    /// Holding the first pose.
+    Stand = 2,
+    /// Walking the gait.
+    Walk = 3,
+    /// Walking until the current step ends, then Stand.
+    Stop = 4,
+    /// Every motor damped; latched until `Reset`.
+    Damping = 5,
+}
+
+impl ControlState {
+    /// Name for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControlState::Idle => "idle",
+            ControlState::Ramp => "ramp",
+            ControlState::Stand => "stand",
+            ControlState::Walk => "walk",
+            ControlState::Stop => "stop",
+            ControlState::Damping => "damping",
+        }
+    }
+
+    /// Whether the motors are position-controlled (and the safety monitor armed).
+    pub fn is_driven(self) -> bool {
+        matches!(
+            self,
+            ControlState::Ramp | ControlState::Stand | ControlState::Walk | ControlState::Stop
+        )
+    }
+}
+
+/// How a motor is commanded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandMode {
+    /// `τ = −kd·dq`.
+    Damping,
+    /// `τ = kp(q* − q) + kd(dq* − dq) + τ_ff`.
+    Pd,
+}
+
+/// One motor command (motor-side units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointCommand {
+    /// Mode.
+    pub mode: CommandMode,
+    /// Desired position, rad.
+    pub q_des_rad: f64,
+    /// Desired velocity, rad/s.
+    pub dq_des_rad_s: f64,
+    /// Stiffness, N·m/rad.
+    pub kp_nm_per_rad: f64,
+    /// Damping, N·m·s/rad.
+    pub kd_nm_s_per_rad: f64,
+    /// Feed-forward torque, N·m.
+    pub tau_ff_nm: f64,
+}
+
+impl JointCommand {
+    /// Damping with gain `kd`.
+    pub const fn damping(kd_nm_s_per_rad: f64) -> Self {
+        Self {
+            mode: CommandMode::Damping,
+            q_des_rad: 0.0,
+            dq_des_rad_s: 0.0,
+            kp_nm_per_rad: 0.0,
+            kd_nm_s_per_rad,
+            tau_ff_nm: 0.0,
+        }
+    }
+
+    /// The torque this command asks for at the measured state, N·m (for telemetry).
+    pub fn torque_at(&self, q_rad: f64, dq_rad_s: f64) -> f64 {
+        match self.mode {
+            CommandMode::Damping => -self.kd_nm_s_per_rad * dq_rad_s,
+            CommandMode::Pd => {
+                self.kp_nm_per_rad * (self.q_des_rad - q_rad)
+                    + self.kd_nm_s_per_rad * (self.dq_des_rad_s - dq_rad_s)
+                    + self.tau_ff_nm
+            }
+        }
+    }
+}
+
+/// Everything the controller reads in one tick.
+#[derive(Clone, Copy, Debug)]
+pub struct TickInput {
+    /// Controller time, s.
+    pub t_s: f64,
+    /// Motor samples by slot.
+    pub motors: [MotorSample; SLOTS],
+    /// IMU sample that arrived this tick.
+    pub imu: Option<ImuSample>,
+    /// Operator command that arrived this tick.
+    pub operator: Option<OperatorCommand>,
+    /// Consecutive deadline overruns of the loop.
+    pub overrun_streak: u32,
+}
+
+impl Default for TickInput {
+    fn default() -> Self {
+        Self {
+            t_s: 0.0,
+            motors: [MotorSample::default(); SLOTS],
+            imu: None,
+            operator: None,
+            overrun_streak: 0,
+        }
+    }
+}
+
+/// What the controller did this tick, for telemetry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Status {
+    /// State after this tick.
+    pub state: ControlState,
+    /// A transition that happened this tick (from, to).
+    pub transition: Option<(ControlState, ControlState)>,
+    /// Stance leg.
+    pub stance: Side,
+    /// Completed steps since Walk began.
+    pub steps: u32,
+    /// Phase τ (unclamped).
+    pub phase: f64,
+    /// τ̇, 1/s.
+    pub phase_rate_per_s: f64,
+    /// Desired outputs y^d (stance hip, stance knee, swing hip, swing knee), rad.
+    pub y_des_rad: [f64; OUTPUTS],
+    /// ẏ^d, rad/s.
+    pub dy_des_rad_s: [f64; OUTPUTS],
+    /// Actual outputs y^a, rad.
+    pub y_act_rad: [f64; OUTPUTS],
+    /// Swing foot height above the stance foot, m.
+    pub swing_foot_height_m: f64,
+    /// Estimated torso pitch, rad.
+    pub pitch_rad: f64,
+    /// Bias-corrected pitch rate, rad/s.
+    pub pitch_rate_rad_s: f64,
+    /// Gyro bias estimate, rad/s.
+    pub gyro_bias_rad_s: f64,
+    /// Latched safety trip.
+    pub trip: Option<Trip>,
+    /// The trip happened this tick.
+    pub new_trip: bool,
+    /// Model-side leg joint angles, rad.
+    pub leg_q_rad: [f64; LEG_SLOTS],
+}
+
+/// Everything the controller writes in one tick.
+#[derive(Clone, Copy, Debug)]
+pub struct TickOutput {
+    /// Commands by slot (ignored for slots that are not present).
+    pub commands: [JointCommand; SLOTS],
+    /// Status for telemetry.
+    pub status: Status,
+}
+
+impl Default for TickOutput {
+    fn default() -> Self {
+        Self {
+            commands: [JointCommand::damping(0.0); SLOTS],
+            status: Status {
+                state: ControlState::Idle,
+                transition: None,
+                stance: Side::Left,
+                steps: 0,
+                phase: 0.0,
+                phase_rate_per_s: 0.0,
+                y_des_rad: [0.0; OUTPUTS],
+                dy_des_rad_s: [0.0; OUTPUTS],
+                y_act_rad: [0.0; OUTPUTS],
+                swing_foot_height_m: 0.0,
+                pitch_rad: 0.0,
+                pitch_rate_rad_s: 0.0,
+                gyro_bias_rad_s: 0.0,
+                trip: None,
+                new_trip: false,
+                leg_q_rad: [0.0; LEG_SLOTS],
+            },
+        }
+    }
+}
+
+/// Which slots have motors, and the fixed data of each.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlotLayout {
+    /// A motor is driven in this slot.
+    pub present: [bool; SLOTS],
+    /// Leg slots: model angle = direction · motor angle + offset.
+    pub direction: [f64; LEG_SLOTS],
+    /// Leg slots: offset, rad.
+    pub offset_rad: [f64; LEG_SLOTS],
+    /// Held slots: position, rad (motor side).
+    pub held_center_rad: [f64; SLOTS],
+    /// Held slots: tolerance, rad.
+    pub held_tolerance_rad: [f64; SLOTS],
+    /// Held slots: kp, N·m/rad.
+    pub held_kp: [f64; SLOTS],
+    /// Held slots: kd, N·m·s/rad.
+    pub held_kd: [f64; SLOTS],
+}
+
+impl SlotLayout {
+    /// The layout of a config; `with_held` = whether the held motors are driven.
+    pub fn new(config: &RuntimeConfig, with_held: bool) -> Self {
+        let mut l = Self {
+            present: [false; SLOTS],
+            direction: [1.0; LEG_SLOTS],
+            offset_rad: [0.0; LEG_SLOTS],
+            held_center_rad: [0.0; SLOTS],
+            held_tolerance_rad: [0.0; SLOTS],
+            held_kp: [0.0; SLOTS],
+            held_kd: [0.0; SLOTS],
+        };
+        for (k, m) in config.leg_motors.iter().enumerate() {
+            l.present[k] = true;
+            l.direction[k] = m.direction;
+            l.offset_rad[k] = m.offset_rad;
+        }
+        for (i, h) in config.held.iter().enumerate().take(MAX_HELD) {
+            let s = LEG_SLOTS + i;
+            l.present[s] = with_held;
+            l.held_center_rad[s] = h.position_rad;
+            l.held_tolerance_rad[s] = h.tolerance_rad;
+            l.held_kp[s] = h.kp_nm_per_rad;
+            l.held_kd[s] = h.kd_nm_s_per_rad;
+        }
+        l
+    }
+}
+
+/// The gait as the controller evaluates it: fixed arrays, no heap.
+#[derive(Clone, Copy, Debug)]
+struct GaitTable {
+    alpha: [[f64; MAX_BEZIER_DEGREE + 1]; OUTPUTS],
+    alpha_len: usize,
+    /// `out_slot[stance][i]`: the leg slot of output i when `stance` (0 left, 1 right) stands.
+    out_slot: [[usize; OUTPUTS]; 2],
+    theta_plus_rad: f64,
+    theta_minus_rad: f64,
+    step_duration_s: f64,
+    first_stance: Side,
+}
+
+fn side_index(s: Side) -> usize {
+    match s {
+        Side::Left => 0,
+        Side::Right => 1,
+    }
+}
+
+impl GaitTable {
+    fn new(gait: &GaitFile, model: &PlanarModel, legs: &Legs) -> Result<Self> {
+        if gait.outputs.len() != OUTPUTS {
+            return Err(RuntimeError::Gait {
+                reason: format!(
+                    "{} outputs, the controller drives {OUTPUTS}",
+                    gait.outputs.len()
+                ),
+            });
+        }
+        let mut out_slot = [[0; OUTPUTS]; 2];
+        for stance in [Side::Left, Side::Right] {
+            let mut used = [false; LEG_SLOTS];
+            for (i, o) in gait.outputs.iter().enumerate() {
+                let name = o.joint_name(stance);
+                let slot = LEG_JOINT_NAMES
+                    .iter()
+                    .position(|n| *n == name)
+                    .ok_or_else(|| RuntimeError::Gait {
+                        reason: format!("output {} drives {name}, not a leg motor", o.name),
+                    })?;
+                if used[slot] {
+                    return Err(RuntimeError::Gait {
+                        reason: format!("two outputs drive {name}"),
+                    });
+                }
+                used[slot] = true;
+                out_slot[side_index(stance)][i] = slot;
+            }
+        }
+        let (theta_plus_rad, theta_minus_rad) = match gait.phase {
+            PhaseDefinition::StateBased {
+                theta_plus_rad,
+                theta_minus_rad,
+            } => (theta_plus_rad, theta_minus_rad),
+            // A time-based gait still has a stance-leg angle range; the state-based option
+            // needs it, so measure it from the gait's end poses.
+            PhaseDefinition::TimeBased => (f64::NAN, f64::NAN),
+        };
+        let mut alpha = [[0.0; MAX_BEZIER_DEGREE + 1]; OUTPUTS];
+        for (i, row) in gait.bezier.alpha.iter().enumerate() {
+            alpha[i][..row.len()].copy_from_slice(row);
+        }
+        let _ = (model, legs);
+        Ok(Self {
+            alpha,
+            alpha_len: gait.bezier.degree + 1,
+            out_slot,
+            theta_plus_rad,
+            theta_minus_rad,
+            step_duration_s: gait.step_duration_s,
+            first_stance: gait.stance_leg,
+        })
+    }
+
+    fn eval(&self, i: usize, s: f64) -> (f64, f64) {
+        let a = &self.alpha[i][..self.alpha_len];
+        (bezier::eval(a, s), bezier::eval_d1(a, s))
+    }
+}
+
+/// Minimum-jerk blend `s(u) = 10u³ − 15u⁴ + 6u⁵` and its derivative ds/du (peak 1.875).
+fn min_jerk(u: f64) -> (f64, f64) {
+    let u = u.clamp(0.0, 1.0);
+    let u2 = u * u;
+    (
+        u2 * u * (10.0 - 15.0 * u + 6.0 * u2),
+        30.0 * u2 * (1.0 - 2.0 * u + u2),
+    )
+}
+
+/// Peak of ds/du of [`min_jerk`].
+const MIN_JERK_PEAK_RATE: f64 = 1.875;
+
+#[derive(Clone, Copy, Debug)]
+struct Ramp {
+    start_t_s: f64,
+    duration_s: f64,
+    from: [f64; SLOTS],
+    to: [f64; SLOTS],
+}
+
+/// The controller. Build once at start-up ([`Controller::new`]); call [`Controller::tick`]
+/// every period.
+#[derive(Clone, Debug)]
+pub struct Controller {
+    model: PlanarModel,
+    legs: Legs,
+    dof: usize,
+    q_template: [f64; MAX_DOF],
+    leg_coord: [usize; LEG_SLOTS],
+    gait: GaitTable,
+    layout: SlotLayout,
+    phase_source: PhaseSource,
+    kp: [f64; LEG_SLOTS],
+    kd: [f64; LEG_SLOTS],
+    feedforward_nm: [f64; OUTPUTS],
+    damping_kd: f64,
+    ramp_min_duration_s: f64,
+    ramp_max_speed_rad_s: f64,
+    switch_min_phase: f64,
+    touchdown_height_m: f64,
+    touchdown_debounce_ticks: u32,
+    max_phase_rate_per_s: f64,
+    estimator: PitchEstimator,
+    safety: SafetyMonitor,
+    // Run-time state.
+    state: ControlState,
+    stance: Side,
+    steps: u32,
+    step_start_t_s: f64,
+    touchdown_ticks: u32,
+    ramp: Ramp,
+    trip: Option<Trip>,
+    motors: [MotorSample; SLOTS],
+    last_imu_t_s: Option<f64>,
+}
+
+impl Controller {
+    /// A controller for `gait` on `model` with `config`; `with_held` = whether the held
+    /// motors are driven (false in simulations without them). Allocates; call at start-up.
+    pub fn new(
+        config: &RuntimeConfig,
+        gait: &GaitFile,
+        model: PlanarModel,
+        with_held: bool,
+    ) -> Result<Self> {
+        config.validate("runtime config")?;
+        model.check_capacity()?;
+        let legs = model.legs()?;
+        let dof = model.dof();
+        let nominal = model.nominal_pose()?;
+        let q = model.with_design(
+            &nominal,
+            gait.design.thigh_length_m,
+            gait.design.shin_length_m,
+        )?;
+        let mut q_template = [0.0; MAX_DOF];
+        q_template[..dof].copy_from_slice(&q);
+        q_template[0] = 0.0;
+        q_template[1] = 0.0;
+        let mut leg_coord = [0; LEG_SLOTS];
+        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
+            leg_coord[k] = model.joints[model.require_joint(name)?].coordinate;
+        }
+        let gait_table = GaitTable::new(gait, &model, &legs)?;
+        if config.walk.phase == PhaseSource::StateBased && !gait_table.theta_plus_rad.is_finite() {
+            return Err(RuntimeError::Gait {
+                reason: "walk.phase = state_based needs a state-based gait (θ⁺, θ⁻)".into(),
+            });
+        }
+        let layout = SlotLayout::new(config, with_held);
+        let zero_ramp = Ramp {
+            start_t_s: 0.0,
+            duration_s: 0.0,
+            from: [0.0; SLOTS],
+            to: [0.0; SLOTS],
+        };
+        Ok(Self {
+            legs,
+            dof,
+            q_template,
+            leg_coord,
+            gait: gait_table,
+            layout,
+            phase_source: config.walk.phase,
+            kp: config.gains.kp_nm_per_rad,
+            kd: config.gains.kd_nm_s_per_rad,
+            feedforward_nm: config.gains.walk_feedforward_nm,
+            damping_kd: config.gains.damping_kd_nm_s_per_rad,
+            ramp_min_duration_s: config.ramp.min_duration_s,
+            ramp_max_speed_rad_s: config.ramp.max_speed_rad_s,
+            switch_min_phase: config.walk.switch_min_phase,
+            touchdown_height_m: config.walk.touchdown_height_m,
+            touchdown_debounce_ticks: config.walk.touchdown_debounce_ticks,
+            max_phase_rate_per_s: config.walk.max_phase_rate_per_s,
+            estimator: PitchEstimator::new(EstimatorParams::from(&config.estimator)),
+            safety: SafetyMonitor::new(
+                config.safety.clone(),
+                config.loop_.max_overrun_streak,
+                layout,
+            ),
+            state: ControlState::Idle,
+            stance: gait.stance_leg,
+            steps: 0,
+            step_start_t_s: 0.0,
+            touchdown_ticks: 0,
+            ramp: zero_ramp,
+            trip: None,
+            motors: [MotorSample::default(); SLOTS],
+            last_imu_t_s: None,
+            model,
+        })
+    }
+
+    /// Current state.
+    pub fn state(&self) -> ControlState {
+        self.state
+    }
+
+    /// Slot layout.
+    pub fn layout(&self) -> &SlotLayout {
+        &self.layout
+    }
+
+    /// Current stance leg.
+    pub fn stance(&self) -> Side {
+        self.stance
+    }
+
+    /// The latched trip, if any.
+    pub fn trip(&self) -> Option<Trip> {
+        self.trip
+    }
+
+    /// The gait's first pose by slot (motor side for every slot), as Ramp targets it.
+    pub fn first_pose(&self) -> [f64; SLOTS] {
+        self.stand_pose(self.gait.first_stance)
+    }
+
+    fn stand_pose(&self, stance: Side) -> [f64; SLOTS] {
+        let mut pose = self.layout.held_center_rad;
+        for i in 0..OUTPUTS {
+            let slot = self.gait.out_slot[side_index(stance)][i];
+            let (y, _) = self.gait.eval(i, 0.0);
+            pose[slot] = self.to_motor(slot, y);
+        }
+        pose
+    }
+
+    fn to_motor(&self, slot: usize, model_rad: f64) -> f64 {
+        (model_rad - self.layout.offset_rad[slot]) * self.layout.direction[slot]
+    }
+
+    fn to_model(&self, slot: usize, motor_rad: f64) -> f64 {
+        self.layout.direction[slot] * motor_rad + self.layout.offset_rad[slot]
+    }
+
+    fn enter(&mut self, to: ControlState, status: &mut Status) {
+        if to != self.state {
+            status.transition = Some((self.state, to));
+            self.state = to;
+        }
+    }
+
+    fn begin_ramp(&mut self, t_s: f64) {
+        let to = self.stand_pose(self.stance);
+        let mut from = to;
+        let mut largest = 0.0_f64;
+        for slot in 0..SLOTS {
+            if self.layout.present[slot] {
+                from[slot] = self.motors[slot].q_rad;
+                largest = largest.max((to[slot] - from[slot]).abs());
+            }
+        }
+        // Minimum-jerk peak speed is 1.875·Δq/T: lengthen T to respect the speed limit.
+        let duration_s = self
+            .ramp_min_duration_s
+            .max(MIN_JERK_PEAK_RATE * largest / self.ramp_max_speed_rad_s);
+        self.ramp = Ramp {
+            start_t_s: t_s,
+            duration_s,
+            from,
+            to,
+        };
+    }
+
+    fn handle_operator(&mut self, cmd: OperatorCommand, t_s: f64, status: &mut Status) {
+        use ControlState as S;
+        match (cmd, self.state) {
+            (OperatorCommand::EStop, _) => {
+                if self.trip.is_none() {
+                    self.trip = Some(Trip::EStop);
+                    status.new_trip = true;
+                }
+                self.enter(S::Damping, status);
+            }
+            (OperatorCommand::Damp, _) => self.enter(S::Damping, status),
+            (OperatorCommand::Start, S::Idle) => {
+                self.stance = self.gait.first_stance;
+                self.begin_ramp(t_s);
+                self.enter(S::Ramp, status);
+            }
+            (OperatorCommand::Walk, S::Stand) => {
+                self.step_start_t_s = t_s;
+                self.touchdown_ticks = 0;
+                self.steps = 0;
+                self.enter(S::Walk, status);
+            }
+            (OperatorCommand::Stop, S::Walk) => self.enter(S::Stop, status),
+            (OperatorCommand::Reset, S::Damping) => {
+                self.trip = None;
+                self.safety.reset_counters();
+                self.enter(S::Idle, status);
+            }
+            _ => {} // not meaningful in this state: ignored
+        }
+    }
+
+    /// One control tick. Never allocates, locks, sleeps or reads a clock.
+    pub fn tick(&mut self, input: &TickInput, out: &mut TickOutput) {
+        let t = input.t_s;
+        let status = &mut out.status;
+        status.transition = None;
+        status.new_trip = false;
+        // Motors: keep the last known values of silent ones.
+        for slot in 0..SLOTS {
+            let m = input.motors[slot];
+            if m.fresh {
+                self.motors[slot] = m;
+            } else {
+                self.motors[slot].fresh = false;
+            }
+        }
+        let mut leg_q = [0.0; LEG_SLOTS];
+        let mut leg_dq = [0.0; LEG_SLOTS];
+        for k in 0..LEG_SLOTS {
+            leg_q[k] = self.to_model(k, self.motors[k].q_rad);
+            leg_dq[k] = self.layout.direction[k] * self.motors[k].dq_rad_s;
+        }
+        // Estimator.
+        if let Some(imu) = &input.imu {
+            let dt = self.last_imu_t_s.map_or(0.0, |t0| imu.t_s - t0);
+            self.estimator
+                .update(imu.gyro_pitch_rad_s, imu.accel_x_mps2, imu.accel_z_mps2, dt);
+            self.last_imu_t_s = Some(imu.t_s);
+        }
+        // Operator, then safety (a trip overrides any request).
+        if let Some(cmd) = input.operator {
+            self.handle_operator(cmd, t, status);
+        }
+        let safety_in = SafetyInput {
+            t_s: t,
+            motors: &self.motors,
+            leg_q_rad: &leg_q,
+            imu: input.imu.as_ref(),
+            pitch_rad: self.estimator.pitch_rad(),
+            overrun_streak: input.overrun_streak,
+        };
+        if let Some(trip) = self.safety.check(&safety_in, self.state.is_driven()) {
+            if self.trip.is_none() {
+                self.trip = Some(trip);
+                status.new_trip = true;
+            }
+            self.enter(ControlState::Damping, status);
+        }
+        if self.state == ControlState::Ramp && t - self.ramp.start_t_s >= self.ramp.duration_s {
+            self.enter(ControlState::Stand, status);
+        }
+
+        // Commands.
+        let mut y_des = [0.0; OUTPUTS];
+        let mut dy_des = [0.0; OUTPUTS];
+        let (mut phase, mut phase_rate, mut foot_h) = (0.0, 0.0, f64::NAN);
+        match self.state {
+            ControlState::Idle | ControlState::Damping => {
+                out.commands = [JointCommand::damping(self.damping_kd); SLOTS];
+            }
+            ControlState::Ramp => {
+                let r = self.ramp;
+                let u = if r.duration_s > 0.0 {
+                    (t - r.start_t_s) / r.duration_s
+                } else {
+                    1.0
+                };
+                let (s, ds_du) = min_jerk(u);
+                let du_dt = if r.duration_s > 0.0 {
+                    1.0 / r.duration_s
+                } else {
+                    0.0
+                };
+                for slot in 0..SLOTS {
+                    let dq = r.to[slot] - r.from[slot];
+                    out.commands[slot] =
+                        self.pd(slot, r.from[slot] + s * dq, dq * ds_du * du_dt, 0.0);
+                }
+            }
+            ControlState::Stand => {
+                let pose = self.stand_pose(self.stance);
+                for (slot, &q) in pose.iter().enumerate() {
+                    out.commands[slot] = self.pd(slot, q, 0.0, 0.0);
+                }
+            }
+            ControlState::Walk | ControlState::Stop => {
+                let mut eval = self.walk_references(t, &leg_q, &leg_dq);
+                if eval.touchdown {
+                    self.touchdown_ticks += 1;
+                } else {
+                    self.touchdown_ticks = 0;
+                }
+                if self.touchdown_ticks >= self.touchdown_debounce_ticks {
+                    // Impact: relabel the legs and start the next step.
+                    self.stance = self.stance.other();
+                    self.step_start_t_s = t;
+                    self.touchdown_ticks = 0;
+                    self.steps = self.steps.saturating_add(1);
+                    if self.state == ControlState::Stop {
+                        self.enter(ControlState::Stand, status);
+                    }
+                    eval = self.walk_references(t, &leg_q, &leg_dq);
+                }
+                (y_des, dy_des) = (eval.y, eval.dy);
+                (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
+                let stance = side_index(self.stance);
+                let walking = self.state != ControlState::Stand;
+                for i in 0..OUTPUTS {
+                    let slot = self.gait.out_slot[stance][i];
+                    let dir = self.layout.direction[slot];
+                    let (q, dq, ff) = if walking {
+                        (y_des[i], dy_des[i], self.feedforward_nm[i])
+                    } else {
+                        (self.gait.eval(i, 0.0).0, 0.0, 0.0)
+                    };
+                    out.commands[slot] = self.pd(slot, self.to_motor(slot, q), dir * dq, dir * ff);
+                }
+                for slot in LEG_SLOTS..SLOTS {
+                    out.commands[slot] = self.pd(slot, self.layout.held_center_rad[slot], 0.0, 0.0);
+                }
+            }
+        }
+        let stance = side_index(self.stance);
+        let mut y_act = [0.0; OUTPUTS];
+        for (i, y) in y_act.iter_mut().enumerate() {
+            *y = leg_q[self.gait.out_slot[stance][i]];
+        }
+        *status = Status {
+            state: self.state,
+            transition: status.transition,
+            stance: self.stance,
+            steps: self.steps,
+            phase,
+            phase_rate_per_s: phase_rate,
+            y_des_rad: y_des,
+            dy_des_rad_s: dy_des,
+            y_act_rad: y_act,
+            swing_foot_height_m: foot_h,
+            pitch_rad: self.estimator.pitch_rad(),
+            pitch_rate_rad_s: self.estimator.pitch_rate_rad_s(),
+            gyro_bias_rad_s: self.estimator.gyro_bias_rad_s(),
+            trip: self.trip,
+            new_trip: status.new_trip,
+            leg_q_rad: leg_q,
+        };
+    }
+
+    /// PD command for a slot with the slot's gains (leg gains or held gains).
+    fn pd(&self, slot: usize, q_des: f64, dq_des: f64, tau_ff: f64) -> JointCommand {
+        let (kp, kd) = if slot < LEG_SLOTS {
+            (self.kp[slot], self.kd[slot])
+        } else {
+            (self.layout.held_kp[slot], self.layout.held_kd[slot])
+        };
+        JointCommand {
+            mode: CommandMode::Pd,
+            q_des_rad: q_des,
+            dq_des_rad_s: dq_des,
+            kp_nm_per_rad: kp,
+            kd_nm_s_per_rad: kd,
+            tau_ff_nm: tau_ff,
+        }
+    }
+
+    /// Phase, desired outputs and the touchdown condition for the current stance leg.
+    fn walk_references(
+        &self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+    ) -> WalkEval {
+        let dof = self.dof;
+        let mut q = self.q_template;
+        let mut dq = [0.0; MAX_DOF];
+        q[2] = self.estimator.pitch_rad();
+        dq[2] = self.estimator.pitch_rate_rad_s();
+        for k in 0..LEG_SLOTS {
+            q[self.leg_coord[k]] = leg_q[k];
+            dq[self.leg_coord[k]] = leg_dq[k];
+        }
+        let swing = self.stance.other();
+        // Sizes are fixed at construction, so these calls cannot fail; NaN marks "unknown".
+        let foot_height_m = self
+            .model
+            .body_poses(&q[..dof])
+            .map(|st| {
+                let zs = self
+                    .model
+                    .frame_position_in(&st, self.legs.side(swing).foot)[1];
+                let zf = self
+                    .model
+                    .frame_position_in(&st, self.legs.side(self.stance).foot)[1];
+                zs - zf
+            })
+            .unwrap_or(f64::NAN);
+        let (phase, rate) = match self.phase_source {
+            PhaseSource::StateBased => {
+                let span = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
+                let (theta, theta_rate) = self
+                    .model
+                    .stance_leg_angle_rate(&q[..dof], &dq[..dof], &self.legs, self.stance)
+                    .unwrap_or((f64::NAN, 0.0));
+                (
+                    model::phase::state_phase(
+                        theta,
+                        self.gait.theta_plus_rad,
+                        self.gait.theta_minus_rad,
+                    ),
+                    theta_rate / span,
+                )
+            }
+            PhaseSource::TimeBased => (
+                model::phase::time_phase(t_s - self.step_start_t_s, self.gait.step_duration_s),
+                1.0 / self.gait.step_duration_s,
+            ),
+        };
+        let rate = rate.clamp(-self.max_phase_rate_per_s, self.max_phase_rate_per_s);
+        let s = if phase.is_finite() {
+            phase.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let inside = (0.0..=1.0).contains(&phase);
+        let mut y = [0.0; OUTPUTS];
+        let mut dy = [0.0; OUTPUTS];
+        for i in 0..OUTPUTS {
+            let (v, d) = self.gait.eval(i, s);
+            y[i] = v;
+            // Outside [0, 1] the reference is held at its end value: no velocity.
+            dy[i] = if inside { d * rate } else { 0.0 };
+        }
+        let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
+        WalkEval {
+            phase,
+            phase_rate: rate,
+            y,
+            dy,
+            foot_height_m,
+            touchdown,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct WalkEval {
+    phase: f64,
+    phase_rate: f64,
+    y: [f64; OUTPUTS],
+    dy: [f64; OUTPUTS],
+    foot_height_m: f64,
+    touchdown: bool,
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used, clippy::needless_range_loop)]
+mod tests {
+    use super::*;
+    use crate::estimator::GRAVITY_MPS2;
+    use crate::Setup;
+
+    /// A controller whose motors track the previous tick's commands exactly (no dynamics) and
+    /// whose IMU reads a constant pitch.
+    struct Harness {
+        c: Controller,
+        input: TickInput,
+        out: TickOutput,
+        dt_s: f64,
+        pitch_rad: f64,
+        imu_on: bool,
+    }
+
+    impl Harness {
+        fn new(phase: PhaseSource) -> Self {
+            let mut setup = Setup::shipped().unwrap();
+            setup.config.walk.phase = phase;
+            let c = setup.controller(false).unwrap();
+            let mut input = TickInput::default();
+            for m in input.motors.iter_mut().take(LEG_SLOTS) {
+                *m = MotorSample {
+                    fresh: true,
+                    temperature_c: 30.0,
+                    ..MotorSample::default()
+                };
+            }
+            // The planned torso pitch at the start of the step.
+            let pitch_rad = setup.gait.initial_state.as_ref().map_or(0.0, |s| s.q[2]);
+            Self {
+                c,
+                input,
+                out: TickOutput::default(),
+                dt_s: 1e-3,
+                pitch_rad,
+                imu_on: true,
+            }
+        }
+
+        fn step(&mut self, op: Option<OperatorCommand>) -> Status {
+            self.step_with(op, |_| {})
+        }
+
+        /// A step with `tweak` applied to the inputs last (fault injection).
+        fn step_with(&mut self, op: Option<OperatorCommand>, tweak: impl Fn(&mut Self)) -> Status {
+            for slot in 0..LEG_SLOTS {
+                let cmd = self.out.commands[slot];
+                let m = &mut self.input.motors[slot];
+                if cmd.mode == CommandMode::Pd {
+                    m.q_rad = cmd.q_des_rad;
+                    m.dq_rad_s = cmd.dq_des_rad_s;
+                }
+            }
+            self.input.t_s += self.dt_s;
+            self.input.imu = self.imu_on.then_some(ImuSample {
+                t_s: self.input.t_s,
+                gyro_pitch_rad_s: 0.0,
+                accel_x_mps2: -GRAVITY_MPS2 * self.pitch_rad.sin(),
+                accel_z_mps2: GRAVITY_MPS2 * self.pitch_rad.cos(),
+            });
+            self.input.operator = op;
+            tweak(self);
+            self.c.tick(&self.input, &mut self.out);
+            self.out.status
+        }
+
+        fn run(&mut self, seconds: f64) -> Status {
+            let n = (seconds / self.dt_s).round() as usize;
+            for _ in 0..n {
+                self.step(None);
+            }
+            self.out.status
+        }
+
+        fn go_stand(&mut self) {
+            self.step(None);
+            assert_eq!(
+                self.step(Some(OperatorCommand::Start)).state,
+                ControlState::Ramp
+            );
+            assert_eq!(self.run(2.5).state, ControlState::Stand);
+        }
+    }
+
+    #[test]
+    fn idle_ramp_stand_walk_stop_stand_damp_and_estop() {
+        let mut h = Harness::new(PhaseSource::TimeBased);
+        let s = h.step(None);
+        assert_eq!(s.state, ControlState::Idle);
+        assert!(h
+            .out
+            .commands
+            .iter()
+            .all(|c| c.mode == CommandMode::Damping));
+        // Walk is ignored while idle.
+        assert_eq!(
+            h.step(Some(OperatorCommand::Walk)).state,
+            ControlState::Idle
+        );
+        let s = h.step(Some(OperatorCommand::Start));
+        assert_eq!(s.transition, Some((ControlState::Idle, ControlState::Ramp)));
+        // Ramp: from straight legs (0) to the first pose; never faster than the limit.
+        let first = h.c.first_pose();
+        let mut peak_speed = 0.0_f64;
+        let mut t_stand = None;
+        for _ in 0..3000 {
+            let s = h.step(None);
+            for c in &h.out.commands[..LEG_SLOTS] {
+                peak_speed = peak_speed.max(c.dq_des_rad_s.abs());
+            }
+            if s.state == ControlState::Stand && t_stand.is_none() {
+                t_stand = Some(h.input.t_s);
+            }
+        }
+        // Largest move ≈ 0.18 rad → 1.875·0.18/0.5 < 2 s minimum: the ramp takes 2 s.
+        let t_stand = t_stand.unwrap();
+        assert!((t_stand - (0.002 + 2.0)).abs() < 2.5e-3, "{t_stand}");
+        assert!(peak_speed <= 0.5 + 1e-9, "{peak_speed}");
+        for k in 0..LEG_SLOTS {
+            assert!((h.input.motors[k].q_rad - first[k]).abs() < 1e-9);
+        }
+        // Walk: time-based phase, a stance switch every step duration (+ debounce).
+        let stance0 = h.c.stance();
+        assert_eq!(
+            h.step(Some(OperatorCommand::Walk)).state,
+            ControlState::Walk
+        );
+        let mut switches = Vec::new();
+        let mut prev = stance0;
+        for _ in 0..1300 {
+            let s = h.step(None);
+            if s.stance != prev {
+                switches.push(h.input.t_s);
+                prev = s.stance;
+            }
+        }
+        assert_eq!(switches.len(), 2, "{switches:?}");
+        let period = switches[1] - switches[0];
+        // Step T = 0.6001 s; touchdown needs τ ≥ 1 then 3 debounced ticks.
+        assert!((period - (0.6001 + 0.003)).abs() < 1.5e-3, "{period}");
+        assert_eq!(h.out.status.steps, 2);
+        // Stop: finish the step, then Stand on the new stance leg.
+        let stance_before = h.c.stance();
+        assert_eq!(
+            h.step(Some(OperatorCommand::Stop)).state,
+            ControlState::Stop
+        );
+        let s = h.run(0.7);
+        assert_eq!(s.state, ControlState::Stand);
+        assert_eq!(s.stance, stance_before.other());
+        // Orderly damping, then reset.
+        assert_eq!(
+            h.step(Some(OperatorCommand::Damp)).state,
+            ControlState::Damping
+        );
+        assert_eq!(h.out.status.trip, None);
+        assert_eq!(
+            h.step(Some(OperatorCommand::Reset)).state,
+            ControlState::Idle
+        );
+        // E-stop from Walk.
+        h.step(Some(OperatorCommand::Start));
+        h.run(2.5);
+        h.step(Some(OperatorCommand::Walk));
+        h.run(0.2);
+        let s = h.step(Some(OperatorCommand::EStop));
+        assert_eq!(s.state, ControlState::Damping);
+        assert_eq!(s.trip, Some(Trip::EStop));
+        assert!(s.new_trip);
+        assert!(h
+            .out
+            .commands
+            .iter()
+            .all(|c| c.mode == CommandMode::Damping));
+        // Latched: Start does nothing until Reset.
+        assert_eq!(
+            h.step(Some(OperatorCommand::Start)).state,
+            ControlState::Damping
+        );
+        let s = h.step(Some(OperatorCommand::Reset));
+        assert_eq!((s.state, s.trip), (ControlState::Idle, None));
+    }
+
+    #[test]
+    fn walking_outputs_follow_the_bezier_with_the_legs_relabeled() {
+        let mut h = Harness::new(PhaseSource::TimeBased);
+        h.go_stand();
+        h.step(Some(OperatorCommand::Walk));
+        let s = h.run(0.3);
+        let tau = s.phase;
+        assert!((tau - 0.3 / 0.600_129_776).abs() < 3e-3, "{tau}");
+        let setup = Setup::shipped().unwrap();
+        for i in 0..OUTPUTS {
+            let a = &setup.gait.bezier.alpha[i];
+            assert!((s.y_des_rad[i] - bezier::eval(a, tau)).abs() < 1e-12);
+            let dy = bezier::eval_d1(a, tau) / 0.600_129_776;
+            assert!((s.dy_des_rad_s[i] - dy).abs() < 1e-9);
+        }
+        // The gait's stance leg is right: stance hip is slot 2.
+        assert_eq!(s.stance, Side::Right);
+        assert_eq!(h.out.commands[2].q_des_rad, s.y_des_rad[0]);
+        assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[2]);
+        // After the switch the left leg stands: stance hip is slot 0.
+        let s = h.run(0.4);
+        assert_eq!(s.stance, Side::Left);
+        assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[0]);
+        assert_eq!(h.out.commands[3].q_des_rad, s.y_des_rad[3]);
+    }
+
+    #[test]
+    fn state_based_phase_matches_the_model_stance_leg_angle() {
+        let mut h = Harness::new(PhaseSource::StateBased);
+        h.go_stand();
+        let s = h.step(Some(OperatorCommand::Walk));
+        // At the first pose the stance-leg angle is θ⁺ up to the torso pitch of the IMU, so
+        // τ ≈ 0 (|Δθ| small against θ⁻ − θ⁺ = 0.307 rad).
+        assert!(s.phase.abs() < 0.1, "{}", s.phase);
+        let setup = Setup::shipped().unwrap();
+        let model = &setup.model;
+        let mut q = setup.gait.initial_state.clone().unwrap().q;
+        let legs = model.legs().unwrap();
+        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
+            q[model.joints[model.require_joint(name).unwrap()].coordinate] = s.leg_q_rad[k];
+        }
+        q[2] = s.pitch_rad;
+        let theta = model.stance_leg_angle(&q, &legs, Side::Right).unwrap();
+        let PhaseDefinition::StateBased {
+            theta_plus_rad,
+            theta_minus_rad,
+        } = setup.gait.phase
+        else {
+            panic!()
+        };
+        let expected = (theta - theta_plus_rad) / (theta_minus_rad - theta_plus_rad);
+        assert!(
+            (s.phase - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            s.phase
+        );
+    }
+
+    fn tripped(h: &mut Harness, max_ticks: usize, tweak: impl Fn(&mut Harness)) -> (Trip, usize) {
+        for n in 1..=max_ticks {
+            let s = h.step_with(None, &tweak);
+            if s.state == ControlState::Damping {
+                assert!(s.new_trip);
+                assert!(h
+                    .out
+                    .commands
+                    .iter()
+                    .all(|c| c.mode == CommandMode::Damping));
+                return (s.trip.unwrap(), n);
+            }
+        }
+        panic!("no trip in {max_ticks} ticks");
+    }
+
+    #[test]
+    fn every_safety_trip_goes_to_damping_with_its_reason() {
+        let standing = || {
+            let mut h = Harness::new(PhaseSource::TimeBased);
+            h.go_stand();
+            h
+        };
+        let mut h = standing();
+        let (t, n) = tripped(&mut h, 5, |h| h.input.motors[1].q_rad = 3.0);
+        assert_eq!(n, 1);
+        assert!(
+            matches!(t, Trip::JointLimit { slot: 1, q_rad, upper_rad, .. } if q_rad == 3.0 && upper_rad == 2.2),
+            "{t:?}"
+        );
+
+        let mut h = standing();
+        let (t, n) = tripped(&mut h, 100, |h| h.input.motors[3].tau_nm = -33.4);
+        assert_eq!(n, 50, "persistent: exactly torque_saturation_ticks");
+        assert!(
+            matches!(
+                t,
+                Trip::TorqueSaturation {
+                    slot: 3,
+                    ticks: 50,
+                    ..
+                }
+            ),
+            "{t:?}"
+        );
+
+        let mut h = standing();
+        h.pitch_rad = 0.9;
+        let (t, _) = tripped(&mut h, 5000, |_| {});
+        assert!(
+            matches!(t, Trip::Fall { pitch_rad, limit_rad } if pitch_rad > 0.6 && limit_rad == 0.6),
+            "{t:?}"
+        );
+
+        let mut h = standing();
+        let (t, _) = tripped(&mut h, 5, |h| h.input.motors[0].temperature_c = 91.0);
+        assert!(
+            matches!(t, Trip::OverTemperature { slot: 0, temperature_c, .. } if temperature_c == 91.0),
+            "{t:?}"
+        );
+
+        let mut h = standing();
+        let (t, _) = tripped(&mut h, 5, |h| h.input.motors[2].errors = 0b10);
+        assert_eq!(t, Trip::MotorFault { slot: 2, flags: 2 });
+
+        let mut h = standing();
+        let (t, n) = tripped(&mut h, 50, |h| h.input.motors[2].fresh = false);
+        assert_eq!(
+            (t, n),
+            (
+                Trip::MissingReplies {
+                    slot: 2,
+                    consecutive: 5
+                },
+                5
+            )
+        );
+
+        let mut h = standing();
+        h.imu_on = false;
+        let (t, n) = tripped(&mut h, 100, |_| {});
+        assert!(matches!(t, Trip::ImuStale { .. }), "{t:?}");
+        assert!((20..=22).contains(&n), "stale after 0.02 s: {n}");
+
+        let mut h = standing();
+        let (t, n) = tripped(&mut h, 5, |h| {
+            if let Some(imu) = h.input.imu.as_mut() {
+                imu.gyro_pitch_rad_s = 100.0;
+            }
+        });
+        assert_eq!(n, 1);
+        assert!(
+            matches!(t, Trip::ImuImplausible { gyro_rad_s, accel_norm_mps2 } if gyro_rad_s == 100.0 && (accel_norm_mps2 - GRAVITY_MPS2).abs() < 1e-9),
+            "{t:?}"
+        );
+
+        let mut h = standing();
+        let (t, n) = tripped(&mut h, 5, |h| h.input.overrun_streak = 20);
+        assert_eq!(
+            (t, n),
+            (
+                Trip::OverrunStreak {
+                    streak: 20,
+                    limit: 20
+                },
+                1
+            )
+        );
+    }
+
+    #[test]
+    fn idle_is_not_armed() {
+        let mut h = Harness::new(PhaseSource::TimeBased);
+        h.input.motors[0].temperature_c = 120.0;
+        assert_eq!(h.run(0.1).state, ControlState::Idle);
+        // Armed on Start: trips at once.
+        let s = h.step(Some(OperatorCommand::Start));
+        assert_eq!(s.state, ControlState::Damping);
+        assert!(matches!(s.trip, Some(Trip::OverTemperature { .. })));
+    }
+
+    #[test]
+    fn min_jerk_is_smooth_and_peaks_at_1_875() {
+        assert_eq!(min_jerk(0.0), (0.0, 0.0));
+        assert_eq!(min_jerk(1.0).0, 1.0);
+        assert!((min_jerk(0.5).1 - MIN_JERK_PEAK_RATE).abs() < 1e-12);
+        let h = 1e-6;
+        let fd = (min_jerk(0.3 + h).0 - min_jerk(0.3 - h).0) / (2.0 * h);
+        assert!((fd - min_jerk(0.3).1).abs() < 1e-8);
+    }
+}

@@ -1,0 +1,79 @@
+//! The runtime's error type (start-up and I/O only; the tick never returns an error).
+
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// Everything that can go wrong setting up or running the loop.
+#[derive(Debug, Error)]
+pub enum RuntimeError {
+    /// A file could not be read or written.
+    #[error("{path}: {error}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the OS said.
+        error: std::io::Error,
+    },
+    /// A config file is not valid TOML of the expected shape.
+    #[error("{origin}: {message}")]
+    Parse {
+        /// Where the text came from.
+        origin: String,
+        /// Parser message.
+        message: String,
+    },
+    /// A config field has a value the runtime refuses.
+    #[error("{origin}: field `{field}` = {value}: {reason}")]
+    InvalidField {
+        /// Where the config came from.
+        origin: String,
+        /// Dotted field path.
+        field: String,
+        /// The offending value.
+        value: String,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// The gait does not fit the robot model or the controller.
+    #[error("gait does not fit: {reason}")]
+    Gait {
+        /// What does not fit.
+        reason: String,
+    },
+    /// The robot model failed.
+    #[error(transparent)]
+    Model(#[from] model::ModelError),
+    /// The buses cannot carry the configured loop rate.
+    #[error(transparent)]
+    Timing(#[from] drivers::timing::TimingError),
+    /// The motor bus failed during start-up or shutdown.
+    #[error("motor bus: {0}")]
+    Bus(#[from] drivers::bus::BusError),
+    /// The MCAP writer failed.
+    #[error("MCAP log {path}: {message}")]
+    Log {
+        /// Log file.
+        path: PathBuf,
+        /// What failed.
+        message: String,
+    },
+    /// Zero-copy telemetry could not be set up.
+    #[error("telemetry service `{service}`: {message}")]
+    Telemetry {
+        /// Service name.
+        service: String,
+        /// What failed.
+        message: String,
+    },
+    /// A thread of the runtime panicked or could not be spawned.
+    #[error("thread `{name}`: {message}")]
+    Thread {
+        /// Thread name.
+        name: &'static str,
+        /// What happened.
+        message: String,
+    },
+}
+
+/// Result alias of the runtime.
+pub type Result<T> = core::result::Result<T, RuntimeError>;

@@ -1,0 +1,630 @@
+//! MCAP logging off the control thread.
+//!
+//! ```text
+//! control thread ── LogProducer::push(LogRecord) ──▶ rtrb SPSC ring (wait-free; full → drop, counted)
+//!                                                        │
+//! writer thread ◀─ pop ─────────────────────────────────┘ ── JSON ──▶ mcap::Writer (zstd chunks) ──▶ file
+//! ```
+//! Channels (JSON messages with `jsonschema` schemas, plottable in Foxglove):
+//! `/joints` (per joint q, dq, τ, temperature, commanded q, dq, τ), `/hzd` (phase, τ̇, stance,
+//! steps, desired/actual outputs), `/estimator` (pitch, rate, gyro bias, raw IMU), `/state`
+//! (state, trip, overruns, tick compute time), `/safety` (one message per trip, with its
+//! values), `/transitions` (state changes). The gait file and the runtime config are attached;
+//! metadata `run` describes the run and `log_stats` counts written and dropped records.
+
+use crate::config::RuntimeConfig;
+use crate::controller::{ControlState, SlotLayout, OUTPUTS, SLOTS};
+use crate::safety::Trip;
+use crate::telemetry::StateSample;
+use crate::{Result, RuntimeError};
+use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+/// One record from the control thread to the writer.
+// Samples dominate the queue; boxing them would allocate in the control thread.
+#[allow(clippy::large_enum_variant)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LogRecord {
+    /// The per-tick sample.
+    Sample(StateSample),
+    /// A safety trip.
+    Trip {
+        /// Time, s.
+        t_s: f64,
+        /// Tick.
+        tick: u64,
+        /// The trip.
+        trip: Trip,
+    },
+    /// A state change.
+    Transition {
+        /// Time, s.
+        t_s: f64,
+        /// From.
+        from: ControlState,
+        /// To.
+        to: ControlState,
+    },
+}
+
+/// The control thread's end: never blocks, never allocates.
+pub struct LogProducer {
+    ring: rtrb::Producer<LogRecord>,
+    dropped: Arc<AtomicU64>,
+}
+
+impl LogProducer {
+    /// Queue a record; when the ring is full the record is dropped and counted.
+    pub fn push(&mut self, record: LogRecord) {
+        if self.ring.push(record).is_err() {
+            self.dropped.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// Records dropped so far.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+}
+
+/// What the logger wrote.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LogStats {
+    /// Records received from the control thread.
+    pub records: u64,
+    /// MCAP messages written (all channels).
+    pub messages: u64,
+    /// Records dropped because the queue was full.
+    pub dropped: u64,
+}
+
+/// The writer thread.
+pub struct Logger {
+    path: PathBuf,
+    stop: Arc<AtomicBool>,
+    dropped: Arc<AtomicU64>,
+    handle: JoinHandle<Result<LogStats>>,
+}
+
+/// Names of the logged channels.
+pub const CHANNELS: [&str; 6] = [
+    "/joints",
+    "/hzd",
+    "/estimator",
+    "/state",
+    "/safety",
+    "/transitions",
+];
+
+/// What the log describes besides the records.
+#[derive(Clone, Debug)]
+pub struct LogContext {
+    /// Joint name per slot (`None`: slot not driven, not logged).
+    pub joint_names: [Option<String>; SLOTS],
+    /// Output names (stance hip, ...).
+    pub output_names: [String; OUTPUTS],
+    /// Gait file JSON (attachment).
+    pub gait_json: String,
+    /// Runtime config TOML (attachment).
+    pub config_toml: String,
+    /// Free-form run metadata.
+    pub metadata: BTreeMap<String, String>,
+    /// Compress chunks with zstd.
+    pub zstd: bool,
+}
+
+impl LogContext {
+    /// The context of a run of `gait` with `config` and this slot layout.
+    pub fn new(config: &RuntimeConfig, gait: &model::gait::GaitFile, layout: &SlotLayout) -> Self {
+        let mut joint_names: [Option<String>; SLOTS] = Default::default();
+        for (slot, name) in joint_names.iter_mut().enumerate() {
+            if !layout.present[slot] {
+                continue;
+            }
+            *name = if slot < crate::controller::LEG_SLOTS {
+                Some(config.leg_motors[slot].joint.clone())
+            } else {
+                config
+                    .held
+                    .get(slot - crate::controller::LEG_SLOTS)
+                    .map(|h| h.motor.joint.clone())
+            };
+        }
+        let mut output_names: [String; OUTPUTS] = Default::default();
+        for (i, o) in gait.outputs.iter().enumerate().take(OUTPUTS) {
+            output_names[i] = o.name.clone();
+        }
+        let mut metadata = BTreeMap::new();
+        metadata.insert("robot".into(), gait.robot.name.clone());
+        metadata.insert("urdf_sha256".into(), gait.robot.sha256.clone());
+        metadata.insert("rate_hz".into(), config.loop_.rate_hz.to_string());
+        metadata.insert("phase".into(), format!("{:?}", config.walk.phase));
+        metadata.insert("runtime_version".into(), env!("CARGO_PKG_VERSION").into());
+        Self {
+            joint_names,
+            output_names,
+            gait_json: serde_json::to_string_pretty(gait).unwrap_or_default(),
+            config_toml: config.to_toml(),
+            metadata,
+            zstd: config.telemetry.log_zstd,
+        }
+    }
+}
+
+fn log_err(path: &Path, e: impl std::fmt::Display) -> RuntimeError {
+    RuntimeError::Log {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Open `path`, write the header, schemas, channels and attachments, and start the writer
+/// thread; returns the control thread's end and the logger.
+pub fn start(
+    path: impl AsRef<Path>,
+    context: LogContext,
+    queue_capacity: usize,
+) -> Result<(LogProducer, Logger)> {
+    let path = path.as_ref().to_path_buf();
+    let file = std::fs::File::create(&path).map_err(|error| RuntimeError::Io {
+        path: path.clone(),
+        error,
+    })?;
+    let options = mcap::WriteOptions::new()
+        .compression(context.zstd.then_some(mcap::Compression::Zstd))
+        .profile("")
+        .library(concat!("adam-hzd runtime ", env!("CARGO_PKG_VERSION")));
+    let mut writer = options
+        .create(BufWriter::new(file))
+        .map_err(|e| log_err(&path, e))?;
+    let ids = Channels::add(&mut writer, &context).map_err(|e| log_err(&path, e))?;
+    for (name, media, data) in [
+        (
+            "gait.json",
+            "application/json",
+            context.gait_json.as_bytes(),
+        ),
+        (
+            "runtime.toml",
+            "application/toml",
+            context.config_toml.as_bytes(),
+        ),
+    ] {
+        writer
+            .attach(&mcap::Attachment {
+                log_time: 0,
+                create_time: 0,
+                name: name.into(),
+                media_type: media.into(),
+                data: std::borrow::Cow::Borrowed(data),
+            })
+            .map_err(|e| log_err(&path, e))?;
+    }
+    writer
+        .write_metadata(&mcap::records::Metadata {
+            name: "run".into(),
+            metadata: context.metadata.clone(),
+        })
+        .map_err(|e| log_err(&path, e))?;
+    let (producer, mut consumer) = rtrb::RingBuffer::new(queue_capacity.max(2));
+    let stop = Arc::new(AtomicBool::new(false));
+    let dropped = Arc::new(AtomicU64::new(0));
+    let (stop_w, dropped_w, path_w) = (stop.clone(), dropped.clone(), path.clone());
+    let handle = std::thread::Builder::new()
+        .name("adam-log".into())
+        .spawn(move || -> Result<LogStats> {
+            let mut stats = LogStats::default();
+            let mut w = RecordWriter {
+                writer,
+                ids,
+                context,
+                seq: 0,
+            };
+            loop {
+                // Read `stop` before draining so nothing pushed before the stop is missed.
+                let stopping = stop_w.load(Ordering::Acquire);
+                while let Ok(record) = consumer.pop() {
+                    stats.records += 1;
+                    stats.messages += w.write(&record).map_err(|e| log_err(&path_w, e))?;
+                }
+                if stopping {
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+            stats.dropped = dropped_w.load(Ordering::Relaxed);
+            let mut meta = BTreeMap::new();
+            meta.insert("records".into(), stats.records.to_string());
+            meta.insert("messages".into(), stats.messages.to_string());
+            meta.insert("dropped".into(), stats.dropped.to_string());
+            w.writer
+                .write_metadata(&mcap::records::Metadata {
+                    name: "log_stats".into(),
+                    metadata: meta,
+                })
+                .map_err(|e| log_err(&path_w, e))?;
+            w.writer.finish().map_err(|e| log_err(&path_w, e))?;
+            Ok(stats)
+        })
+        .map_err(|e| RuntimeError::Thread {
+            name: "adam-log",
+            message: e.to_string(),
+        })?;
+    Ok((
+        LogProducer {
+            ring: producer,
+            dropped: dropped.clone(),
+        },
+        Logger {
+            path,
+            stop,
+            dropped,
+            handle,
+        },
+    ))
+}
+
+impl Logger {
+    /// Records dropped so far.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Drain the queue, finish the file and join the writer.
+    pub fn finish(self) -> Result<LogStats> {
+        self.stop.store(true, Ordering::Release);
+        self.handle.join().map_err(|_| RuntimeError::Log {
+            path: self.path.clone(),
+            message: "writer thread panicked".into(),
+        })?
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Channels {
+    joints: u16,
+    hzd: u16,
+    estimator: u16,
+    state: u16,
+    safety: u16,
+    transitions: u16,
+}
+
+fn number() -> Value {
+    json!({"type": "number"})
+}
+
+fn object_of(names: impl Iterator<Item = String>, item: Value) -> Value {
+    let props: Map<String, Value> = names.map(|n| (n, item.clone())).collect();
+    json!({"type": "object", "properties": props})
+}
+
+impl Channels {
+    fn add<W: std::io::Write + std::io::Seek>(
+        w: &mut mcap::Writer<W>,
+        ctx: &LogContext,
+    ) -> mcap::McapResult<Self> {
+        let joint = json!({"type": "object", "properties": {
+            "q_rad": number(), "dq_rad_s": number(), "tau_nm": number(),
+            "temperature_c": number(), "q_cmd_rad": number(), "dq_cmd_rad_s": number(),
+            "tau_cmd_nm": number(), "fresh": {"type": "boolean"}}});
+        let mut joints = object_of(ctx.joint_names.iter().flatten().cloned(), joint);
+        joints["properties"]["t_s"] = number();
+        let outputs = || object_of(ctx.output_names.iter().cloned(), number());
+        let hzd = json!({"type": "object", "properties": {
+            "t_s": number(), "phase": number(), "phase_rate_per_s": number(),
+            "stance": {"type": "string"}, "steps": {"type": "integer"},
+            "swing_foot_height_m": number(),
+            "y_des_rad": outputs(), "dy_des_rad_s": outputs(), "y_act_rad": outputs()}});
+        let estimator = json!({"type": "object", "properties": {
+            "t_s": number(), "pitch_rad": number(), "pitch_rate_rad_s": number(),
+            "gyro_bias_rad_s": number(), "imu_gyro_rad_s": number(),
+            "imu_accel_x_mps2": number(), "imu_accel_z_mps2": number()}});
+        let state = json!({"type": "object", "properties": {
+            "t_s": number(), "tick": {"type": "integer"}, "state": {"type": "string"},
+            "state_code": {"type": "integer"}, "trip_code": {"type": "integer"},
+            "overruns": {"type": "integer"}, "overrun_streak": {"type": "integer"},
+            "tick_compute_us": number()}});
+        let safety = json!({"type": "object", "properties": {
+            "t_s": number(), "tick": {"type": "integer"}, "reason": {"type": "string"},
+            "code": {"type": "integer"}}, "additionalProperties": true});
+        let transitions = json!({"type": "object", "properties": {
+            "t_s": number(), "from": {"type": "string"}, "to": {"type": "string"}}});
+        let mut add = |topic: &str, schema_name: &str, schema: &Value| {
+            let text = serde_json::to_vec(schema).unwrap_or_default();
+            let sid = w.add_schema(schema_name, "jsonschema", &text)?;
+            w.add_channel(sid, topic, "json", &BTreeMap::new())
+        };
+        Ok(Self {
+            joints: add(CHANNELS[0], "adam.Joints", &joints)?,
+            hzd: add(CHANNELS[1], "adam.Hzd", &hzd)?,
+            estimator: add(CHANNELS[2], "adam.Estimator", &estimator)?,
+            state: add(CHANNELS[3], "adam.State", &state)?,
+            safety: add(CHANNELS[4], "adam.SafetyTrip", &safety)?,
+            transitions: add(CHANNELS[5], "adam.Transition", &transitions)?,
+        })
+    }
+}
+
+struct RecordWriter<W: std::io::Write + std::io::Seek> {
+    writer: mcap::Writer<W>,
+    ids: Channels,
+    context: LogContext,
+    seq: u32,
+}
+
+/// Seconds to MCAP nanoseconds (negative times clamp to 0).
+fn ns(t_s: f64) -> u64 {
+    (t_s.max(0.0) * 1e9).round() as u64
+}
+
+fn side_name(stance: u32) -> &'static str {
+    if stance == 0 {
+        "left"
+    } else {
+        "right"
+    }
+}
+
+/// A trip as a JSON object with its reason and values.
+pub fn trip_json(trip: &Trip) -> Value {
+    let mut v = match *trip {
+        Trip::EStop => json!({}),
+        Trip::JointLimit {
+            slot,
+            q_rad,
+            lower_rad,
+            upper_rad,
+        } => json!({"slot": slot, "q_rad": q_rad, "lower_rad": lower_rad, "upper_rad": upper_rad}),
+        Trip::TorqueSaturation {
+            slot,
+            tau_nm,
+            limit_nm,
+            ticks,
+        } => json!({"slot": slot, "tau_nm": tau_nm, "limit_nm": limit_nm, "ticks": ticks}),
+        Trip::Fall {
+            pitch_rad,
+            limit_rad,
+        } => json!({"pitch_rad": pitch_rad, "limit_rad": limit_rad}),
+        Trip::OverTemperature {
+            slot,
+            temperature_c,
+            limit_c,
+        } => json!({"slot": slot, "temperature_c": temperature_c, "limit_c": limit_c}),
+        Trip::MotorFault { slot, flags } => json!({"slot": slot, "flags": flags}),
+        Trip::MissingReplies { slot, consecutive } => {
+            json!({"slot": slot, "consecutive": consecutive})
+        }
+        Trip::ImuStale { age_s, limit_s } => json!({"age_s": age_s, "limit_s": limit_s}),
+        Trip::ImuImplausible {
+            gyro_rad_s,
+            accel_norm_mps2,
+        } => json!({"gyro_rad_s": gyro_rad_s, "accel_norm_mps2": accel_norm_mps2}),
+        Trip::OverrunStreak { streak, limit } => json!({"streak": streak, "limit": limit}),
+    };
+    v["reason"] = json!(trip.name());
+    v["code"] = json!(trip.code());
+    v
+}
+
+impl<W: std::io::Write + std::io::Seek> RecordWriter<W> {
+    fn put(&mut self, channel: u16, t_s: f64, v: &Value) -> mcap::McapResult<()> {
+        let data = serde_json::to_vec(v).unwrap_or_default();
+        self.seq = self.seq.wrapping_add(1);
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: self.seq,
+                log_time: ns(t_s),
+                publish_time: ns(t_s),
+            },
+            &data,
+        )
+    }
+
+    /// Write one record; returns the number of MCAP messages written.
+    fn write(&mut self, record: &LogRecord) -> mcap::McapResult<u64> {
+        match record {
+            LogRecord::Sample(s) => {
+                let t = s.t_s;
+                let mut joints = Map::new();
+                joints.insert("t_s".into(), json!(t));
+                for (slot, name) in self.context.joint_names.iter().enumerate() {
+                    let Some(name) = name else { continue };
+                    joints.insert(
+                        name.clone(),
+                        json!({
+                            "q_rad": s.q_rad[slot], "dq_rad_s": s.dq_rad_s[slot],
+                            "tau_nm": s.tau_nm[slot], "temperature_c": s.temperature_c[slot],
+                            "q_cmd_rad": s.q_cmd_rad[slot], "dq_cmd_rad_s": s.dq_cmd_rad_s[slot],
+                            "tau_cmd_nm": s.tau_cmd_nm[slot],
+                            "fresh": s.fresh_mask & (1 << slot) != 0,
+                        }),
+                    );
+                }
+                let outputs = |v: &[f64; OUTPUTS]| -> Value {
+                    let m: Map<String, Value> = self
+                        .context
+                        .output_names
+                        .iter()
+                        .zip(v)
+                        .map(|(n, x)| (n.clone(), json!(x)))
+                        .collect();
+                    Value::Object(m)
+                };
+                let hzd = json!({
+                    "t_s": t, "phase": s.phase, "phase_rate_per_s": s.phase_rate_per_s,
+                    "stance": side_name(s.stance), "steps": s.steps,
+                    "swing_foot_height_m": s.swing_foot_height_m,
+                    "y_des_rad": outputs(&s.y_des_rad), "dy_des_rad_s": outputs(&s.dy_des_rad_s),
+                    "y_act_rad": outputs(&s.y_act_rad),
+                });
+                let estimator = json!({
+                    "t_s": t, "pitch_rad": s.pitch_rad, "pitch_rate_rad_s": s.pitch_rate_rad_s,
+                    "gyro_bias_rad_s": s.gyro_bias_rad_s, "imu_gyro_rad_s": s.imu_gyro_rad_s,
+                    "imu_accel_x_mps2": s.imu_accel_x_mps2, "imu_accel_z_mps2": s.imu_accel_z_mps2,
+                });
+                let state = json!({
+                    "t_s": t, "tick": s.tick, "state": s.control_state().name(),
+                    "state_code": s.state, "trip_code": s.trip_code, "overruns": s.overruns,
+                    "overrun_streak": s.overrun_streak,
+                    "tick_compute_us": s.tick_compute_ns as f64 * 1e-3,
+                });
+                let ids = self.ids;
+                self.put(ids.joints, t, &Value::Object(joints))?;
+                self.put(ids.hzd, t, &hzd)?;
+                self.put(ids.estimator, t, &estimator)?;
+                self.put(ids.state, t, &state)?;
+                Ok(4)
+            }
+            LogRecord::Trip { t_s, tick, trip } => {
+                let mut v = trip_json(trip);
+                v["t_s"] = json!(t_s);
+                v["tick"] = json!(tick);
+                self.put(self.ids.safety, *t_s, &v)?;
+                Ok(1)
+            }
+            LogRecord::Transition { t_s, from, to } => {
+                let v = json!({"t_s": t_s, "from": from.name(), "to": to.name()});
+                self.put(self.ids.transitions, *t_s, &v)?;
+                Ok(1)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::Setup;
+    use std::collections::HashMap;
+
+    /// A unique temporary file path (no tempfile crate: the test removes it).
+    pub(crate) fn temp_path(tag: &str) -> PathBuf {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_nanos();
+        std::env::temp_dir().join(format!("adam-{tag}-{}-{nanos}.mcap", std::process::id()))
+    }
+
+    #[test]
+    fn written_log_rereads_with_the_expected_channels_counts_and_attachments() {
+        let setup = Setup::shipped().unwrap();
+        let layout = SlotLayout::new(&setup.config, false);
+        let ctx = LogContext::new(&setup.config, &setup.gait, &layout);
+        let path = temp_path("log");
+        let (mut tx, logger) = start(&path, ctx, 64).unwrap();
+        let n = 500;
+        for k in 0..n {
+            let mut s = StateSample {
+                tick: k,
+                t_s: k as f64 * 1e-3,
+                ..StateSample::default()
+            };
+            s.q_rad[1] = 0.001 * k as f64;
+            tx.push(LogRecord::Sample(s));
+            if k == 100 {
+                tx.push(LogRecord::Transition {
+                    t_s: 0.1,
+                    from: ControlState::Idle,
+                    to: ControlState::Ramp,
+                });
+            }
+            if k == 200 {
+                tx.push(LogRecord::Trip {
+                    t_s: 0.2,
+                    tick: k,
+                    trip: Trip::Fall {
+                        pitch_rad: 0.7,
+                        limit_rad: 0.6,
+                    },
+                });
+            }
+            // Let the writer keep up: this test is about content, not drops.
+            if k % 32 == 0 {
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
+        }
+        let stats = logger.finish().unwrap();
+        assert_eq!(stats.dropped, 0);
+        assert_eq!(stats.records, n + 2);
+        assert_eq!(stats.messages, 4 * n + 2);
+
+        let bytes = std::fs::read(&path).unwrap();
+        let mut counts: HashMap<String, u64> = HashMap::new();
+        let mut knee = Vec::new();
+        let mut trip = None;
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let m = m.unwrap();
+            let schema = m.channel.schema.as_ref().unwrap();
+            assert_eq!(schema.encoding, "jsonschema");
+            assert_eq!(m.channel.message_encoding, "json");
+            *counts.entry(m.channel.topic.clone()).or_default() += 1;
+            let v: Value = serde_json::from_slice(&m.data).unwrap();
+            match m.channel.topic.as_str() {
+                "/joints" => knee.push(v["left_knee_pitch"]["q_rad"].as_f64().unwrap()),
+                "/safety" => trip = Some(v),
+                _ => {}
+            }
+        }
+        for topic in ["/joints", "/hzd", "/estimator", "/state"] {
+            assert_eq!(counts[topic], n, "{topic}");
+        }
+        assert_eq!(counts["/safety"], 1);
+        assert_eq!(counts["/transitions"], 1);
+        assert!((knee[123] - 0.123).abs() < 1e-12);
+        let trip = trip.unwrap();
+        assert_eq!(trip["reason"], "fall");
+        assert_eq!(trip["pitch_rad"], 0.7);
+        // Attachments and metadata are indexed in the summary.
+        let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
+        let names: Vec<_> = summary
+            .attachment_indexes
+            .iter()
+            .map(|a| a.name.clone())
+            .collect();
+        assert_eq!(names, ["gait.json", "runtime.toml"]);
+        let gait = mcap::read::attachment(&bytes, &summary.attachment_indexes[0]).unwrap();
+        assert!(
+            model::gait::GaitFile::from_json(std::str::from_utf8(&gait.data).unwrap(), "log")
+                .is_ok()
+        );
+        let stats_index = summary
+            .metadata_indexes
+            .iter()
+            .find(|m| m.name == "log_stats")
+            .unwrap();
+        let meta = mcap::read::metadata(&bytes, stats_index).unwrap();
+        assert_eq!(meta.metadata["dropped"], "0");
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn a_full_queue_drops_and_counts_instead_of_blocking() {
+        let setup = Setup::shipped().unwrap();
+        let layout = SlotLayout::new(&setup.config, false);
+        let ctx = LogContext::new(&setup.config, &setup.gait, &layout);
+        let path = temp_path("drops");
+        let (mut tx, logger) = start(&path, ctx, 16).unwrap();
+        // 10 000 pushes in a burst far outrun a writer that sleeps 2 ms between drains.
+        for k in 0..10_000u64 {
+            tx.push(LogRecord::Sample(StateSample {
+                tick: k,
+                ..StateSample::default()
+            }));
+        }
+        let dropped = tx.dropped();
+        let stats = logger.finish().unwrap();
+        assert!(dropped > 0);
+        assert_eq!(stats.dropped, dropped);
+        assert_eq!(stats.records + stats.dropped, 10_000);
+        std::fs::remove_file(&path).unwrap();
+    }
+}

@@ -1,0 +1,502 @@
+//! The loop driver: runs the [`Controller`] at a fixed rate on its own thread, against any
+//! backend that is a [`MotorBus`] and an [`Imu`] (SimBus, SocketCAN + IMU, replay).
+//!
+//! One period:
+//! ```text
+//! exchange(commands of the last tick) → replies ─┐     (one tick of command latency)
+//! read_imu(t) ───────────────────────────────────┤
+//! operator: script entry due, else ring poll ────┴─▶ Controller::tick ─▶ commands
+//!                                                      └─▶ StateSample ─▶ iceoryx2 + log queue
+//! sleep until the absolute deadline t0 + (k+1)·T; late → overrun (streak feeds the safety monitor)
+//! ```
+//! Time comes from a [`Clock`]: [`MonotonicClock`] (real time, `clock_nanosleep` with an
+//! absolute deadline) or [`SimulatedClock`] (time is an argument: sleeping just advances it,
+//! so a simulated backend runs as fast as the CPU allows). Before the first tick the thread
+//! asks for `mlockall` and SCHED_FIFO when the config says so; refusals are warnings, reported
+//! in [`RunSummary::realtime`].
+
+use crate::controller::{
+    CommandMode, ControlState, Controller, JointCommand, MotorSample, OperatorCommand, TickInput,
+    TickOutput, LEG_SLOTS, SLOTS,
+};
+use crate::io::Imu;
+use crate::log::{LogContext, LogRecord, LogStats};
+use crate::operator::OperatorReceiver;
+use crate::rt_sys;
+use crate::safety::Trip;
+use crate::telemetry::{LoopStats, StateSample};
+use crate::{Result, RuntimeError, Setup};
+use core::time::Duration;
+use drivers::a1::{Command, MotorId, Reply};
+use drivers::bus::{BusError, MotorBus, MotorSpec};
+use std::path::PathBuf;
+
+/// Where the loop's time comes from.
+pub trait Clock {
+    /// Current time, s (any origin).
+    fn now_s(&mut self) -> f64;
+    /// Block until `now_s() >= deadline_s`.
+    fn sleep_until(&mut self, deadline_s: f64);
+}
+
+/// Real time: CLOCK_MONOTONIC and absolute-deadline sleeping.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MonotonicClock;
+
+impl Clock for MonotonicClock {
+    fn now_s(&mut self) -> f64 {
+        rt_sys::monotonic_ns() as f64 * 1e-9
+    }
+    fn sleep_until(&mut self, deadline_s: f64) {
+        rt_sys::sleep_until_ns((deadline_s.max(0.0) * 1e9) as u64);
+    }
+}
+
+/// Simulated time: starts at 0 and jumps to each deadline; never late.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SimulatedClock {
+    now_s: f64,
+}
+
+impl Clock for SimulatedClock {
+    fn now_s(&mut self) -> f64 {
+        self.now_s
+    }
+    fn sleep_until(&mut self, deadline_s: f64) {
+        self.now_s = self.now_s.max(deadline_s);
+    }
+}
+
+/// How to run.
+#[derive(Clone, Debug)]
+pub struct LoopOptions {
+    /// Run time, s (controller time).
+    pub duration_s: f64,
+    /// Drive the held motors too (false when the backend has only the four leg motors).
+    pub with_held: bool,
+    /// Operator commands at given controller times, s (sorted by time; applied once each).
+    pub script: Vec<(f64, OperatorCommand)>,
+    /// Write an MCAP log here.
+    pub log_path: Option<PathBuf>,
+    /// Publish the state sample over iceoryx2 (`telemetry.service_name`).
+    pub publish: bool,
+    /// Ask for mlockall / SCHED_FIFO as the config says (off for simulation and tests).
+    pub realtime: bool,
+}
+
+impl LoopOptions {
+    /// A simulation run of `duration_s`: leg motors only, no log, no publishing, no RT set-up.
+    pub fn simulation(duration_s: f64) -> Self {
+        Self {
+            duration_s,
+            with_held: false,
+            script: Vec::new(),
+            log_path: None,
+            publish: false,
+            realtime: false,
+        }
+    }
+}
+
+/// What the real-time set-up achieved (`Err(errno)`: refused; `None`: not asked).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RealtimeStatus {
+    /// `mlockall`.
+    pub memory_locked: Option<core::result::Result<(), i32>>,
+    /// SCHED_FIFO.
+    pub fifo: Option<core::result::Result<(), i32>>,
+}
+
+/// Tick compute time statistics, ns (100 ns resolution).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TickTimes {
+    /// Median.
+    pub median_ns: u64,
+    /// 99th percentile.
+    pub p99_ns: u64,
+    /// Maximum.
+    pub max_ns: u64,
+}
+
+/// What a run did.
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    /// Ticks run.
+    pub ticks: u64,
+    /// Controller time at the last tick, s.
+    pub end_time_s: f64,
+    /// Deadlines missed.
+    pub overruns: u64,
+    /// Longest overrun streak.
+    pub max_overrun_streak: u32,
+    /// Exchanges that failed (bus errors other than a missing reply).
+    pub bus_errors: u64,
+    /// Replies missing.
+    pub missing_replies: u64,
+    /// State after the last tick.
+    pub final_state: ControlState,
+    /// Latched trip at the end.
+    pub trip: Option<Trip>,
+    /// Every state change (time, from, to) — at most the first 64.
+    pub transitions: Vec<(f64, ControlState, ControlState)>,
+    /// The last state sample.
+    pub last_sample: StateSample,
+    /// Controller tick compute time.
+    pub tick_times: TickTimes,
+    /// Log statistics, if logging.
+    pub log: Option<LogStats>,
+    /// Telemetry samples that could not be published.
+    pub publish_failures: u64,
+    /// Real-time set-up outcome.
+    pub realtime: RealtimeStatus,
+}
+
+/// A compute-time histogram with 100 ns bins up to 2 ms (allocated once, before the loop).
+struct Histogram {
+    bins: Vec<u64>,
+    max_ns: u64,
+    count: u64,
+}
+
+impl Histogram {
+    fn new() -> Self {
+        Self {
+            bins: vec![0; 20_001],
+            max_ns: 0,
+            count: 0,
+        }
+    }
+    fn add(&mut self, ns: u64) {
+        let bin = ((ns / 100) as usize).min(self.bins.len() - 1);
+        self.bins[bin] += 1;
+        self.max_ns = self.max_ns.max(ns);
+        self.count += 1;
+    }
+    fn quantile_ns(&self, q: f64) -> u64 {
+        let target = ((self.count as f64) * q).ceil().max(1.0) as u64;
+        let mut seen = 0;
+        for (bin, &n) in self.bins.iter().enumerate() {
+            seen += n;
+            if seen >= target {
+                // Upper edge of the bin, capped by the true maximum.
+                return ((bin as u64 + 1) * 100).min(self.max_ns);
+            }
+        }
+        self.max_ns
+    }
+    fn times(&self) -> TickTimes {
+        TickTimes {
+            median_ns: self.quantile_ns(0.5),
+            p99_ns: self.quantile_ns(0.99),
+            max_ns: self.max_ns,
+        }
+    }
+}
+
+fn to_a1(motor: MotorId, c: &JointCommand) -> Command {
+    match c.mode {
+        CommandMode::Damping => Command::damping(motor, c.kd_nm_s_per_rad),
+        CommandMode::Pd => Command::pd(
+            motor,
+            c.q_des_rad,
+            c.dq_des_rad_s,
+            c.kp_nm_per_rad,
+            c.kd_nm_s_per_rad,
+            c.tau_ff_nm,
+        ),
+    }
+}
+
+/// Run the loop on its own thread (`adam-rt`) and wait for it. Returns the summary and the
+/// backend (deactivated: every motor in damping).
+///
+/// The backend is configured with the driven motors of the config (legs, plus held motors
+/// if `options.with_held`) and activated before the first tick.
+pub fn run<B, C>(
+    setup: &Setup,
+    backend: B,
+    clock: C,
+    options: LoopOptions,
+    operator: Option<OperatorReceiver>,
+) -> Result<(RunSummary, B)>
+where
+    B: MotorBus + Imu + Send + 'static,
+    C: Clock + Send + 'static,
+{
+    let controller = setup.controller(options.with_held)?;
+    let config = setup.config.clone();
+    let log_context = LogContext::new(&config, &setup.gait, controller.layout());
+    std::thread::Builder::new()
+        .name("adam-rt".into())
+        .spawn(move || {
+            run_on_this_thread(
+                controller,
+                &config,
+                log_context,
+                backend,
+                clock,
+                options,
+                operator,
+            )
+        })
+        .map_err(|e| RuntimeError::Thread {
+            name: "adam-rt",
+            message: e.to_string(),
+        })?
+        .join()
+        .map_err(|_| RuntimeError::Thread {
+            name: "adam-rt",
+            message: "the control thread panicked".into(),
+        })?
+}
+
+/// The loop itself, on the calling thread (what [`run`] spawns).
+#[allow(clippy::too_many_arguments)]
+pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
+    mut controller: Controller,
+    config: &crate::config::RuntimeConfig,
+    log_context: LogContext,
+    mut backend: B,
+    mut clock: C,
+    options: LoopOptions,
+    mut operator: Option<OperatorReceiver>,
+) -> Result<(RunSummary, B)> {
+    let rate_hz = config.loop_.rate_hz;
+    let period_s = 1.0 / rate_hz;
+    let layout = *controller.layout();
+    // Motors: the driven slots, validated against the bus timing.
+    let mut specs = Vec::new();
+    let mut slot_of = Vec::new();
+    let mut ids = Vec::new();
+    for slot in 0..SLOTS {
+        if !layout.present[slot] {
+            continue;
+        }
+        let m = if slot < LEG_SLOTS {
+            &config.leg_motors[slot]
+        } else {
+            &config.held[slot - LEG_SLOTS].motor
+        };
+        let id = MotorId::new(m.id).ok_or_else(|| RuntimeError::InvalidField {
+            origin: "runtime config".into(),
+            field: format!("motor of slot {slot}.id"),
+            value: m.id.to_string(),
+            reason: "must be 1..=127".into(),
+        })?;
+        specs.push(MotorSpec { bus: m.bus, id });
+        slot_of.push(slot);
+        ids.push(id);
+    }
+    for bus in 0..config.loop_.bus_count {
+        let count = specs.iter().filter(|s| s.bus == bus).count();
+        if count > 0 {
+            drivers::timing::validate(rate_hz, count, config.loop_.bitrate_bps)?;
+        }
+    }
+    let mut realtime = RealtimeStatus::default();
+    if options.realtime {
+        if config.loop_.lock_memory {
+            let r = rt_sys::lock_memory();
+            if let Err(errno) = r {
+                eprintln!(
+                    "warning: mlockall refused (errno {errno}); running without locked memory"
+                );
+            }
+            realtime.memory_locked = Some(r);
+        }
+        if config.loop_.fifo_priority > 0 {
+            let r = rt_sys::set_fifo(config.loop_.fifo_priority);
+            if let Err(errno) = r {
+                eprintln!(
+                    "warning: SCHED_FIFO refused (errno {errno}); running at normal priority"
+                );
+            }
+            realtime.fifo = Some(r);
+        }
+    }
+    #[cfg(feature = "iceoryx2")]
+    let mut publisher = if options.publish && !config.telemetry.service_name.is_empty() {
+        Some(crate::telemetry::Publisher::new(
+            &config.telemetry.service_name,
+        )?)
+    } else {
+        None
+    };
+    let (mut log_tx, logger) = match &options.log_path {
+        Some(path) => {
+            let (tx, logger) =
+                crate::log::start(path, log_context, config.telemetry.log_queue_capacity)?;
+            (Some(tx), Some(logger))
+        }
+        None => (None, None),
+    };
+    backend.configure(&specs)?;
+    backend.activate()?;
+
+    let budget = Duration::from_secs_f64(period_s);
+    let damp = Command::damping(ids[0], config.gains.damping_kd_nm_s_per_rad);
+    let mut commands: Vec<Command> = ids
+        .iter()
+        .map(|&id| Command { motor: id, ..damp })
+        .collect();
+    let mut replies: Vec<Reply> = ids.iter().map(|&id| Reply::zeroed(id)).collect();
+    let mut input = TickInput::default();
+    let mut out = TickOutput::default();
+    let mut sample = StateSample::default();
+    let mut histogram = Histogram::new();
+    let mut transitions = Vec::with_capacity(64);
+    let mut script = options.script.iter().peekable();
+    let ticks = (options.duration_s * rate_hz).round().max(0.0) as u64;
+    let (mut overruns, mut streak, mut max_streak) = (0u64, 0u32, 0u32);
+    let (mut bus_errors, mut missing) = (0u64, 0u64);
+    let log_every = u64::from(config.telemetry.log_every_n_ticks);
+    let t0 = clock.now_s();
+    let mut deadline = t0;
+
+    for tick in 0..ticks {
+        let t = clock.now_s() - t0;
+        // Exchange: a NaN position marks "no reply written".
+        for r in replies.iter_mut() {
+            r.q_rad = f64::NAN;
+        }
+        let result = backend.exchange(&commands, &mut replies, budget);
+        let replies_valid = match result {
+            Ok(_) | Err(BusError::MissingReply { .. }) => true,
+            Err(_) => {
+                bus_errors += 1;
+                false
+            }
+        };
+        for (i, r) in replies.iter().enumerate() {
+            let slot = slot_of[i];
+            if replies_valid && r.q_rad.is_finite() {
+                input.motors[slot] = MotorSample {
+                    fresh: true,
+                    q_rad: r.q_rad,
+                    dq_rad_s: r.dq_rad_s,
+                    tau_nm: r.tau_nm,
+                    temperature_c: r.temperature_c,
+                    errors: r.errors.0,
+                };
+            } else {
+                input.motors[slot].fresh = false;
+                missing += 1;
+            }
+        }
+        input.t_s = t;
+        input.imu = backend.read_imu(t);
+        input.operator = match script.peek() {
+            Some(&&(at, cmd)) if at <= t => {
+                script.next();
+                Some(cmd)
+            }
+            _ => operator.as_mut().and_then(|o| o.poll()),
+        };
+        input.overrun_streak = streak;
+        let c0 = rt_sys::monotonic_ns();
+        controller.tick(&input, &mut out);
+        let compute_ns = rt_sys::monotonic_ns().saturating_sub(c0);
+        histogram.add(compute_ns);
+        for (i, cmd) in commands.iter_mut().enumerate() {
+            *cmd = to_a1(ids[i], &out.commands[slot_of[i]]);
+        }
+        sample.fill(
+            &input,
+            &out,
+            LoopStats {
+                tick,
+                overruns,
+                tick_compute_ns: compute_ns,
+            },
+        );
+        #[cfg(feature = "iceoryx2")]
+        if let Some(p) = publisher.as_mut() {
+            p.publish(&sample);
+        }
+        let status = &out.status;
+        if let Some((from, to)) = status.transition {
+            if transitions.len() < transitions.capacity() {
+                transitions.push((t, from, to));
+            }
+        }
+        if let Some(tx) = log_tx.as_mut() {
+            if let Some((from, to)) = status.transition {
+                tx.push(LogRecord::Transition { t_s: t, from, to });
+            }
+            if let (true, Some(trip)) = (status.new_trip, status.trip) {
+                tx.push(LogRecord::Trip { t_s: t, tick, trip });
+            }
+            if tick % log_every == 0 {
+                tx.push(LogRecord::Sample(sample));
+            }
+        }
+        // Absolute deadlines; when more than a period late, re-anchor instead of bursting.
+        deadline += period_s;
+        let now = clock.now_s();
+        if now > deadline {
+            overruns += 1;
+            streak += 1;
+            max_streak = max_streak.max(streak);
+            if now > deadline + period_s {
+                deadline = now;
+            }
+        } else {
+            streak = 0;
+        }
+        clock.sleep_until(deadline);
+    }
+    let deactivated = backend.deactivate();
+    let log = match logger {
+        Some(l) => Some(l.finish()?),
+        None => None,
+    };
+    deactivated?;
+    #[cfg(feature = "iceoryx2")]
+    let publish_failures = publisher.as_ref().map_or(0, |p| p.failures());
+    #[cfg(not(feature = "iceoryx2"))]
+    let publish_failures = 0;
+    let summary = RunSummary {
+        ticks,
+        end_time_s: input.t_s,
+        overruns,
+        max_overrun_streak: max_streak,
+        bus_errors,
+        missing_replies: missing,
+        final_state: out.status.state,
+        trip: out.status.trip,
+        transitions,
+        last_sample: sample,
+        tick_times: histogram.times(),
+        log,
+        publish_failures,
+        realtime,
+    };
+    Ok((summary, backend))
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn simulated_clock_jumps_to_deadlines_and_never_goes_back() {
+        let mut c = SimulatedClock::default();
+        c.sleep_until(0.5);
+        assert_eq!(c.now_s(), 0.5);
+        c.sleep_until(0.2);
+        assert_eq!(c.now_s(), 0.5);
+    }
+
+    #[test]
+    fn histogram_quantiles_bracket_the_data() {
+        let mut h = Histogram::new();
+        for k in 1..=1000u64 {
+            h.add(k * 1000 - 500); // 0.5 µs … 999.5 µs
+        }
+        let t = h.times();
+        assert!((499_500..=499_600).contains(&t.median_ns), "{t:?}");
+        assert!((989_500..=989_600).contains(&t.p99_ns), "{t:?}");
+        assert_eq!(t.max_ns, 999_500);
+    }
+}

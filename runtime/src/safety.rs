@@ -1,0 +1,291 @@
+//! Safety monitor, run every tick while the motors are driven (Ramp, Stand, Walk, Stop).
+//!
+//! Each check that fails yields a [`Trip`]: a small `Copy` value with the reason and the
+//! offending values (no string formatting on the hot path). The controller goes to Damping on
+//! the first trip and latches it until an operator `Reset`.
+
+use crate::config::SafetyConfig;
+use crate::controller::{MotorSample, SlotLayout, LEG_SLOTS, SLOTS};
+use crate::ImuSample;
+
+/// Why the controller went to Damping.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Trip {
+    /// Operator emergency stop.
+    EStop,
+    /// A joint left its position limits (leg joints: model side; held joints: tolerance).
+    JointLimit {
+        /// Motor slot.
+        slot: u8,
+        /// Measured position, rad.
+        q_rad: f64,
+        /// Lower limit, rad.
+        lower_rad: f64,
+        /// Upper limit, rad.
+        upper_rad: f64,
+    },
+    /// A motor stayed at its torque limit for too long.
+    TorqueSaturation {
+        /// Motor slot.
+        slot: u8,
+        /// Measured torque, N·m.
+        tau_nm: f64,
+        /// Saturation threshold, N·m.
+        limit_nm: f64,
+        /// Consecutive saturated ticks.
+        ticks: u32,
+    },
+    /// The torso pitched beyond the fall limit.
+    Fall {
+        /// Estimated pitch, rad.
+        pitch_rad: f64,
+        /// Limit, rad.
+        limit_rad: f64,
+    },
+    /// A motor is too hot.
+    OverTemperature {
+        /// Motor slot.
+        slot: u8,
+        /// Winding temperature, °C.
+        temperature_c: f64,
+        /// Limit, °C.
+        limit_c: f64,
+    },
+    /// A motor reported fault flags ([`drivers::a1::ErrorFlags`] bits).
+    MotorFault {
+        /// Motor slot.
+        slot: u8,
+        /// Fault bits.
+        flags: u8,
+    },
+    /// A motor did not reply for too many consecutive ticks.
+    MissingReplies {
+        /// Motor slot.
+        slot: u8,
+        /// Consecutive missing replies.
+        consecutive: u32,
+    },
+    /// No fresh IMU sample for too long.
+    ImuStale {
+        /// Age of the newest sample, s (infinite if none ever arrived).
+        age_s: f64,
+        /// Limit, s.
+        limit_s: f64,
+    },
+    /// The IMU sample is not physically plausible.
+    ImuImplausible {
+        /// Gyro pitch rate, rad/s.
+        gyro_rad_s: f64,
+        /// Accelerometer norm, m/s².
+        accel_norm_mps2: f64,
+    },
+    /// The loop missed too many deadlines in a row.
+    OverrunStreak {
+        /// Consecutive overruns.
+        streak: u32,
+        /// Limit.
+        limit: u32,
+    },
+}
+
+impl Trip {
+    /// A stable numeric code (telemetry, `StateSample::trip_code`); 0 means no trip.
+    pub fn code(&self) -> u32 {
+        match self {
+            Trip::EStop => 1,
+            Trip::JointLimit { .. } => 2,
+            Trip::TorqueSaturation { .. } => 3,
+            Trip::Fall { .. } => 4,
+            Trip::OverTemperature { .. } => 5,
+            Trip::MotorFault { .. } => 6,
+            Trip::MissingReplies { .. } => 7,
+            Trip::ImuStale { .. } => 8,
+            Trip::ImuImplausible { .. } => 9,
+            Trip::OverrunStreak { .. } => 10,
+        }
+    }
+
+    /// Short name of the reason (a `&'static str`, no formatting).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Trip::EStop => "e_stop",
+            Trip::JointLimit { .. } => "joint_limit",
+            Trip::TorqueSaturation { .. } => "torque_saturation",
+            Trip::Fall { .. } => "fall",
+            Trip::OverTemperature { .. } => "over_temperature",
+            Trip::MotorFault { .. } => "motor_fault",
+            Trip::MissingReplies { .. } => "missing_replies",
+            Trip::ImuStale { .. } => "imu_stale",
+            Trip::ImuImplausible { .. } => "imu_implausible",
+            Trip::OverrunStreak { .. } => "overrun_streak",
+        }
+    }
+}
+
+/// Per-tick inputs of the monitor besides the motor samples.
+#[derive(Clone, Copy, Debug)]
+pub struct SafetyInput<'a> {
+    /// Controller time, s.
+    pub t_s: f64,
+    /// Motor samples by slot (model-side angles for leg slots, motor side for held slots).
+    pub motors: &'a [MotorSample; SLOTS],
+    /// Model-side leg joint angles, rad.
+    pub leg_q_rad: &'a [f64; LEG_SLOTS],
+    /// IMU sample of this tick, if any.
+    pub imu: Option<&'a ImuSample>,
+    /// Estimated torso pitch, rad.
+    pub pitch_rad: f64,
+    /// Consecutive overruns reported by the loop driver.
+    pub overrun_streak: u32,
+}
+
+/// The stateful monitor: counters for persistent conditions.
+#[derive(Clone, Debug)]
+pub struct SafetyMonitor {
+    limits: SafetyConfig,
+    max_overrun_streak: u32,
+    layout: SlotLayout,
+    saturated_ticks: [u32; SLOTS],
+    missing: [u32; SLOTS],
+    last_imu_t_s: f64,
+}
+
+impl SafetyMonitor {
+    /// A monitor with these limits for the motors of `layout`.
+    pub fn new(limits: SafetyConfig, max_overrun_streak: u32, layout: SlotLayout) -> Self {
+        Self {
+            limits,
+            max_overrun_streak,
+            layout,
+            saturated_ticks: [0; SLOTS],
+            missing: [0; SLOTS],
+            last_imu_t_s: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Forget persistent counters (after a reset), keeping the IMU age.
+    pub fn reset_counters(&mut self) {
+        self.saturated_ticks = [0; SLOTS];
+        self.missing = [0; SLOTS];
+    }
+
+    /// Update the counters with this tick and, if `armed`, return the first trip.
+    ///
+    /// Counters always run (so a condition that began while idle counts), but only an armed
+    /// monitor trips.
+    // `!(x <= limit)` on purpose: a NaN reading must trip, not pass.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    pub fn check(&mut self, input: &SafetyInput<'_>, armed: bool) -> Option<Trip> {
+        let l = &self.limits;
+        let mut trip = None;
+        let mut first = |t: Trip| {
+            if trip.is_none() {
+                trip = Some(t);
+            }
+        };
+        if input.overrun_streak >= self.max_overrun_streak {
+            first(Trip::OverrunStreak {
+                streak: input.overrun_streak,
+                limit: self.max_overrun_streak,
+            });
+        }
+        // IMU: plausibility of this sample, then age.
+        if let Some(imu) = input.imu {
+            let norm = imu.accel_x_mps2.hypot(imu.accel_z_mps2);
+            let plausible = imu.gyro_pitch_rad_s.is_finite()
+                && imu.gyro_pitch_rad_s.abs() <= l.max_gyro_rad_s
+                && norm.is_finite()
+                && norm >= l.accel_norm_range_mps2[0]
+                && norm <= l.accel_norm_range_mps2[1];
+            if plausible {
+                self.last_imu_t_s = self.last_imu_t_s.max(imu.t_s);
+            } else {
+                first(Trip::ImuImplausible {
+                    gyro_rad_s: imu.gyro_pitch_rad_s,
+                    accel_norm_mps2: norm,
+                });
+            }
+        }
+        let age_s = input.t_s - self.last_imu_t_s;
+        if !(age_s <= l.max_imu_age_s) {
+            first(Trip::ImuStale {
+                age_s,
+                limit_s: l.max_imu_age_s,
+            });
+        }
+        if !(input.pitch_rad.abs() <= l.max_pitch_rad) {
+            first(Trip::Fall {
+                pitch_rad: input.pitch_rad,
+                limit_rad: l.max_pitch_rad,
+            });
+        }
+        for slot in 0..SLOTS {
+            if !self.layout.present[slot] {
+                continue;
+            }
+            let m = &input.motors[slot];
+            let s = slot as u8;
+            if !m.fresh {
+                self.missing[slot] = self.missing[slot].saturating_add(1);
+                if self.missing[slot] >= l.max_missing_replies {
+                    first(Trip::MissingReplies {
+                        slot: s,
+                        consecutive: self.missing[slot],
+                    });
+                }
+                continue; // stale values: nothing else to check
+            }
+            self.missing[slot] = 0;
+            if m.errors != 0 {
+                first(Trip::MotorFault {
+                    slot: s,
+                    flags: m.errors,
+                });
+            }
+            if !(m.temperature_c <= l.max_temperature_c) {
+                first(Trip::OverTemperature {
+                    slot: s,
+                    temperature_c: m.temperature_c,
+                    limit_c: l.max_temperature_c,
+                });
+            }
+            if m.tau_nm.abs() >= l.torque_saturation_nm {
+                self.saturated_ticks[slot] = self.saturated_ticks[slot].saturating_add(1);
+                if self.saturated_ticks[slot] >= l.torque_saturation_ticks {
+                    first(Trip::TorqueSaturation {
+                        slot: s,
+                        tau_nm: m.tau_nm,
+                        limit_nm: l.torque_saturation_nm,
+                        ticks: self.saturated_ticks[slot],
+                    });
+                }
+            } else {
+                self.saturated_ticks[slot] = 0;
+            }
+            let (q, lower, upper) = if slot < LEG_SLOTS {
+                (
+                    input.leg_q_rad[slot],
+                    l.joint_lower_rad[slot],
+                    l.joint_upper_rad[slot],
+                )
+            } else {
+                let c = self.layout.held_center_rad[slot];
+                let w = self.layout.held_tolerance_rad[slot];
+                (m.q_rad, c - w, c + w)
+            };
+            if !(q >= lower && q <= upper) {
+                first(Trip::JointLimit {
+                    slot: s,
+                    q_rad: q,
+                    lower_rad: lower,
+                    upper_rad: upper,
+                });
+            }
+        }
+        if armed {
+            trip
+        } else {
+            None
+        }
+    }
+}

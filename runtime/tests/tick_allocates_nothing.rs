@@ -1,0 +1,126 @@
+//! `Controller::tick` allocates nothing: a counting global allocator watches this test
+//! thread over thousands of ticks through Ramp, Stand and Walk (both phase sources, stance
+//! switches included). No locks: by construction `Controller` owns only plain data (no `Mutex`,
+//! `RwLock`, channel or `Arc` in `controller.rs`, `estimator.rs`, `safety.rs`);
+//! `controller_is_owned_plain_data` checks it is `'static + Clone + Send + Sync` (no borrowed
+//! shared state).
+
+// A global allocator is an `unsafe impl`; it only forwards to `System` and counts.
+#![allow(unsafe_code)]
+
+use runtime::config::PhaseSource;
+use runtime::controller::{CommandMode, ControlState, OperatorCommand, TickInput, TickOutput};
+use runtime::estimator::GRAVITY_MPS2;
+use runtime::{ImuSample, Setup};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+struct Counting;
+
+thread_local! {
+    static COUNT: Cell<u64> = const { Cell::new(0) };
+    static ACTIVE: Cell<bool> = const { Cell::new(false) };
+}
+
+// SAFETY: every method forwards its arguments unchanged to `System`, which upholds the
+// `GlobalAlloc` contract; the counters are thread-local `Cell`s and never allocate.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if ACTIVE.with(|a| a.get()) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if ACTIVE.with(|a| a.get()) {
+            COUNT.with(|c| c.set(c.get() + 1));
+        }
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn counted<R>(f: impl FnOnce() -> R) -> (R, u64) {
+    COUNT.with(|c| c.set(0));
+    ACTIVE.with(|a| a.set(true));
+    let r = f();
+    ACTIVE.with(|a| a.set(false));
+    (r, COUNT.with(|c| c.get()))
+}
+
+fn walk_without_allocating(phase: PhaseSource) {
+    let mut setup = Setup::shipped().expect("shipped setup");
+    setup.config.walk.phase = phase;
+    let mut c = setup.controller(false).expect("controller");
+    let mut input = TickInput::default();
+    for m in input.motors.iter_mut().take(4) {
+        m.fresh = true;
+        m.temperature_c = 30.0;
+    }
+    let mut out = TickOutput::default();
+    let pitch: f64 = 0.0237;
+    let mut steps = 0;
+    let mut walk_ticks = 0;
+    let ((), allocations) = counted(|| {
+        for k in 0..6000u32 {
+            for slot in 0..4 {
+                let cmd = out.commands[slot];
+                if cmd.mode == CommandMode::Pd {
+                    input.motors[slot].q_rad = cmd.q_des_rad;
+                    input.motors[slot].dq_rad_s = cmd.dq_des_rad_s;
+                }
+            }
+            input.t_s = f64::from(k) * 1e-3;
+            input.imu = Some(ImuSample {
+                t_s: input.t_s,
+                gyro_pitch_rad_s: 0.001,
+                accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
+                accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
+            });
+            input.operator = match k {
+                1 => Some(OperatorCommand::Start),
+                2500 => Some(OperatorCommand::Walk),
+                _ => None,
+            };
+            c.tick(&input, &mut out);
+            if out.status.state == ControlState::Walk {
+                walk_ticks += 1;
+            }
+            steps = out.status.steps;
+        }
+    });
+    assert_eq!(out.status.trip, None);
+    assert!(walk_ticks >= 3400, "{walk_ticks} ticks in Walk");
+    if phase == PhaseSource::TimeBased {
+        assert!(steps >= 5, "stance switches exercised: {steps}");
+    }
+    assert_eq!(allocations, 0, "Controller::tick allocated");
+}
+
+#[test]
+fn tick_allocates_nothing_with_the_time_based_phase() {
+    walk_without_allocating(PhaseSource::TimeBased);
+}
+
+#[test]
+fn tick_allocates_nothing_with_the_state_based_phase() {
+    walk_without_allocating(PhaseSource::StateBased);
+}
+
+#[test]
+fn the_counter_sees_allocations() {
+    let (v, n) = counted(|| vec![1u8; 100]);
+    assert_eq!(v.len(), 100);
+    assert!(n >= 1);
+}
+
+#[test]
+fn controller_is_owned_plain_data() {
+    fn owned<T: Send + Sync + Clone + 'static>() {}
+    owned::<runtime::controller::Controller>();
+}
