@@ -7,7 +7,7 @@
 
 use crate::{PlannerError, Result};
 use model::gait::OutputDefinition;
-use model::robot::{JointRole, Legs, BASE_DOF};
+use model::robot::{JointRole, Legs};
 use model::{PlanarModel, Real, Side};
 
 /// A planar biped prepared for planning.
@@ -138,7 +138,6 @@ impl PlanarBiped {
             dq[k] = -v[k];
             ddq[k] = -a[k];
         }
-        debug_assert!(BASE_DOF == 3);
         Ok([q, dq, ddq])
     }
 

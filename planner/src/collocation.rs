@@ -14,7 +14,8 @@
 //! - **virtual constraints** the way FROST enforces them: y = ẏ = 0 at the first point and the
 //!   output dynamics ÿ + 2εẏ + ε²y = 0 at every point (PLANNER-NOTES: position-level y = 0 at
 //!   every point over-constrains the interpolant and does not converge);
-//! - **phase**: θ(q_0) = θ⁺, θ(q_2N) = θ⁻;
+//! - **phase** (lifted: τ, τ̇, τ̈ are variables at every point): θ(q) − θ⁺ = τ (θ⁻ − θ⁺) and its
+//!   first and second time derivatives, with τ = 0 at the first point and τ = 1 at the last;
 //! - **swing foot**: z_nsf ≥ 0 at every interior point, ≥ clearance at mid-step, = 0 at the end
 //!   (the guard) with ż_nsf ≤ −v_impact, x_nsf = d at the end;
 //! - **impact and periodicity** (the HZD condition, with y = ẏ = 0 at the start):
@@ -92,6 +93,11 @@ impl Layout {
     pub fn n(&self, k: usize) -> usize {
         k * self.stride + 3 * self.nq + 2 * self.nu
     }
+    /// Index of the phase τ at point k (followed by τ̇ and τ̈): lifted variables, so that the
+    /// costly stance-leg kinematics is differentiated once per point, not once per output.
+    pub fn tau(&self, k: usize) -> usize {
+        k * self.stride + 3 * self.nq + 3 * self.nu
+    }
     fn globals(&self) -> usize {
         self.points() * self.stride
     }
@@ -140,6 +146,8 @@ impl Layout {
 enum Kind {
     /// Dynamics residual (nq) and 3 contact-force rows.
     Dynamics,
+    /// θ(q) − θ⁺ = τ Δθ, θ̇ = τ̇ Δθ, θ̈ = τ̈ Δθ at one point.
+    PhaseLift,
     /// Output dynamics of output o.
     OutputDynamics(usize),
     /// y and ẏ of output o at the first point.
@@ -152,10 +160,11 @@ enum Kind {
     SwingHeight,
     /// Swing foot at the end: x − d and ż.
     SwingEnd,
-    /// θ(q) − θ⁺ (false) or θ(q) − θ⁻ (true).
-    Phase(bool),
     /// Impact and periodicity.
     Impact,
+    /// τ at the first and last point (equalities, not fixed bounds: fixed variables make an
+    /// interior point's barrier ill-conditioned).
+    TauEnds,
 }
 
 #[derive(Clone, Debug)]
@@ -204,7 +213,17 @@ struct ObjectiveSlots {
     slack_d: Vec<usize>,
     t_d: usize,
     d_d: usize,
+    /// Diagonal slots of the scaled torques (feasibility-stage regularizer).
+    torque: Vec<usize>,
 }
+
+/// Weight of the feasibility stage's torque regularizer Σ_k Σ_a (u_ka / 10 N·m)²: small enough
+/// not to shape the gait, large enough to give the interior point a bounded, strictly convex
+/// objective in the torques (a zero objective left the first solve wandering for minutes).
+pub const FEASIBILITY_TORQUE_WEIGHT: f64 = 1e-4;
+
+/// Structural Jacobian entries (local output, local var) and Hessian pairs (local, local).
+type Pattern = (Vec<(usize, usize)>, Vec<(usize, usize)>);
 
 fn lcg(state: &mut u64) -> f64 {
     *state = state
@@ -227,7 +246,7 @@ impl HzdProblem {
             m: biped.outputs.len(),
             degree: config.collocation.bezier_degree,
             intervals: config.collocation.intervals,
-            stride: 3 * biped.nq() + 3 * biped.nu(),
+            stride: 3 * biped.nq() + 3 * biped.nu() + 3,
         };
         if config.cost.weights.len() != layout.nu {
             return Err(crate::PlannerError::InvalidField {
@@ -301,11 +320,27 @@ impl HzdProblem {
             lo.extend([g.min_normal_force_n, 0.0, 0.0]);
             hi.extend([inf, inf, inf]);
             self.add(Kind::Dynamics, vars, &lo, &hi);
-            // Output dynamics.
+            // Lifted phase and output dynamics.
+            let mut vars = self.point_vars(k, true);
+            vars.extend([
+                l.theta_plus(),
+                l.theta_minus(),
+                l.tau(k),
+                l.tau(k) + 1,
+                l.tau(k) + 2,
+            ]);
+            self.add(Kind::PhaseLift, vars, &[0.0; 3], &[0.0; 3]);
             for o in 0..l.m {
-                let mut vars = self.point_vars(k, true);
-                vars.extend((0..=b).map(|j| l.alpha(o, j)));
-                vars.extend([l.theta_plus(), l.theta_minus()]);
+                let j = self.biped.output_coords[o];
+                let mut vars = vec![
+                    l.q(k) + j,
+                    l.dq(k) + j,
+                    l.ddq(k) + j,
+                    l.tau(k),
+                    l.tau(k) + 1,
+                    l.tau(k) + 2,
+                ];
+                vars.extend((0..=b).map(|jj| l.alpha(o, jj)));
                 self.add(Kind::OutputDynamics(o), vars, &[0.0], &[0.0]);
             }
             // Power slacks.
@@ -328,9 +363,16 @@ impl HzdProblem {
             }
         }
         for o in 0..l.m {
-            let mut vars = self.point_vars(0, false);
-            vars.extend((0..=b).map(|j| l.alpha(o, j)));
-            vars.extend([l.theta_plus(), l.theta_minus()]);
+            let j = self.biped.output_coords[o];
+            let mut vars = vec![
+                l.q(0) + j,
+                l.dq(0) + j,
+                l.ddq(0) + j,
+                l.tau(0),
+                l.tau(0) + 1,
+                l.tau(0) + 2,
+            ];
+            vars.extend((0..=b).map(|jj| l.alpha(o, jj)));
             self.add(Kind::OutputStart(o), vars, &[0.0, 0.0], &[0.0, 0.0]);
         }
         for i in 0..l.intervals {
@@ -359,12 +401,12 @@ impl HzdProblem {
             &[0.0, -inf],
             &[0.0, -g.impact_velocity_mps],
         );
-        let mut vars: Vec<usize> = (l.q(0)..l.q(0) + nq).collect();
-        vars.push(l.theta_plus());
-        self.add(Kind::Phase(false), vars, &[0.0], &[0.0]);
-        let mut vars: Vec<usize> = (l.q(last)..l.q(last) + nq).collect();
-        vars.push(l.theta_minus());
-        self.add(Kind::Phase(true), vars, &[0.0], &[0.0]);
+        self.add(
+            Kind::TauEnds,
+            vec![l.tau(0), l.tau(last)],
+            &[0.0, 1.0],
+            &[0.0, 1.0],
+        );
         let mut vars = self.point_vars(last, false);
         vars.extend(self.point_vars(0, false));
         let mut lo = vec![0.0; 2 * nq];
@@ -401,7 +443,7 @@ impl HzdProblem {
 
     fn build_patterns(&mut self) {
         let x = self.probe_point();
-        let mut cache: HashMap<Kind, (Vec<(usize, usize)>, Vec<(usize, usize)>)> = HashMap::new();
+        let mut cache: HashMap<Kind, Pattern> = HashMap::new();
         let mut hess_index: HashMap<(usize, usize), usize> = HashMap::new();
         let mut hess = SparsityPattern::default();
         let mut slot = |r: usize, c: usize, hess: &mut SparsityPattern| -> usize {
@@ -444,11 +486,16 @@ impl HzdProblem {
         self.obj_slots.slack_d = sw.iter().map(|&(i, _)| slot(i, d, &mut hess)).collect();
         self.obj_slots.t_d = slot(t, d, &mut hess);
         self.obj_slots.d_d = slot(d, d, &mut hess);
+        let l = &self.layout;
+        self.obj_slots.torque = (0..l.points())
+            .flat_map(|k| (0..l.nu).map(move |a| l.u(k) + a))
+            .map(|i| slot(i, i, &mut hess))
+            .collect();
         self.hess_pattern = hess;
     }
 
     /// Structural Jacobian entries and Hessian pairs of a block at the probe point.
-    fn detect(&self, blk: &Block, x: &[f64]) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
+    fn detect(&self, blk: &Block, x: &[f64]) -> Pattern {
         let nv = blk.vars.len();
         let z: Vec<f64> = blk.vars.iter().map(|&i| x[i]).collect();
         let mut jac = Vec::new();
@@ -541,39 +588,32 @@ impl HzdProblem {
                 out[nq + 1] = lam[1] * mu - lam[0];
                 out[nq + 2] = lam[1] * mu + lam[0];
             }
-            Kind::OutputDynamics(o) | Kind::OutputStart(o) => {
-                let start = matches!(kind, Kind::OutputStart(_));
+            Kind::PhaseLift => {
                 let (qr, dqr) = (&z[..nq], &z[nq..2 * nq]);
-                let (ddqr, rest): (Vec<S>, &[S]) = if start {
-                    (vec![S::zero(); nq], &z[2 * nq..])
-                } else {
-                    (
-                        z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect(),
-                        &z[3 * nq..],
-                    )
-                };
-                let alpha = &rest[..=l.degree];
-                let (tp, tm) = (rest[l.degree + 1], rest[l.degree + 2]);
+                let ddqr: Vec<S> = z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect();
+                let r = &z[3 * nq..];
+                let (tp, tm, tau, tau_d, tau_dd) = (r[0], r[1], r[2], r[3], r[4]);
                 let [q, dq, ddq] = bp.full_state(qr, dqr, &ddqr).map_err(|_| DomainError)?;
                 let th = bp
                     .model
                     .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)
                     .map_err(|_| DomainError)?;
                 let span = tm - tp;
-                if span.re().abs() < 1e-9 {
-                    return Err(DomainError);
-                }
-                let tau = (th.theta - tp) / span;
-                let (tau_d, tau_dd) = (th.rate / span, th.accel / span);
-                let (yd, yd1, yd2) = bezier::eval_all(alpha, tau);
-                let j = bp.output_coords[o];
-                let y = qr[j] - yd;
-                let dy = dqr[j] - yd1 * tau_d;
-                if start {
+                out[0] = th.theta - tp - tau * span;
+                out[1] = th.rate - tau_d * span;
+                out[2] = th.accel - tau_dd * span;
+            }
+            Kind::OutputDynamics(_) | Kind::OutputStart(_) => {
+                let (qj, dqj, ddqj) = (z[0], z[1], z[2] * ACC_SCALE);
+                let (tau, tau_d, tau_dd) = (z[3], z[4], z[5]);
+                let (yd, yd1, yd2) = bezier::eval_all(&z[6..], tau);
+                let y = qj - yd;
+                let dy = dqj - yd1 * tau_d;
+                if matches!(kind, Kind::OutputStart(_)) {
                     out[0] = y;
                     out[1] = dy;
                 } else {
-                    let ddy = ddqr[j] - yd2 * tau_d * tau_d - yd1 * tau_dd;
+                    let ddy = ddqj - yd2 * tau_d * tau_d - yd1 * tau_dd;
                     let eps = self.config.collocation.output_gain_per_s;
                     out[0] = (ddy + dy * (2.0 * eps) + y * (eps * eps)) / eps;
                 }
@@ -586,6 +626,10 @@ impl HzdProblem {
                 out[1] = vm - (va + ve) * 0.5 - h * (aa - ae) / 8.0;
                 out[2] = qe - qa - h * (va + vm * 4.0 + ve) / 6.0;
                 out[3] = ve - va - h * (aa + am * 4.0 + ae) / 6.0;
+            }
+            Kind::TauEnds => {
+                out[0] = z[0];
+                out[1] = z[1];
             }
             Kind::Power(_) => {
                 out[0] = z[0] - z[1] - z[2] * TORQUE_SCALE * z[3];
@@ -610,17 +654,6 @@ impl HzdProblem {
                     out[0] = p[0] - z[2 * nq];
                     out[1] = v[1];
                 }
-            }
-            Kind::Phase(_) => {
-                let zero = vec![S::zero(); nq];
-                let [q, _, _] = bp
-                    .full_state(&z[..nq], &zero, &zero)
-                    .map_err(|_| DomainError)?;
-                let th = bp
-                    .model
-                    .stance_leg_angle(&q, &bp.legs, bp.stance)
-                    .map_err(|_| DomainError)?;
-                out[0] = th - z[nq];
             }
             Kind::Impact => {
                 let (qn, dqn) = (&z[..nq], &z[nq..2 * nq]);
@@ -653,6 +686,11 @@ impl HzdProblem {
             }
         }
         Ok(())
+    }
+
+    fn torque_vars(&self) -> impl Iterator<Item = usize> + '_ {
+        let l = &self.layout;
+        (0..l.points()).flat_map(move |k| (0..l.nu).map(move |a| l.u(k) + a))
     }
 
     fn local<T: Copy>(x: &[T], vars: &[usize]) -> Vec<T> {
@@ -759,6 +797,42 @@ impl HzdProblem {
         (lo, hi)
     }
 
+    /// Per block kind: (blocks, Jacobian entries per block, Hessian pairs per block), for profiling.
+    pub fn block_statistics(&self) -> Vec<(String, usize, usize, usize)> {
+        let mut out: Vec<(String, usize, usize, usize)> = Vec::new();
+        for b in &self.blocks {
+            let name = format!("{:?}", b.kind);
+            if let Some(e) = out.iter_mut().find(|e| e.0 == name) {
+                e.1 += 1;
+            } else {
+                out.push((name, 1, b.jac.len(), b.hess.len()));
+            }
+        }
+        out
+    }
+
+    /// Largest violation per block kind at x, for diagnosing a start point or a failed solve.
+    pub fn violation_by_kind(&self, x: &[f64]) -> Vec<(String, f64)> {
+        let mut g = vec![0.0; self.num_constraints()];
+        let _ = self.constraints(x, &mut g);
+        let mut out: Vec<(String, f64)> = Vec::new();
+        for b in &self.blocks {
+            let v = (b.row0..b.row0 + b.n_out)
+                .map(|i| {
+                    (self.lower_g[i] - g[i])
+                        .max(g[i] - self.upper_g[i])
+                        .max(0.0)
+                })
+                .fold(0.0, f64::max);
+            let name = format!("{:?}", b.kind);
+            match out.iter_mut().find(|e| e.0 == name) {
+                Some(e) => e.1 = e.1.max(v),
+                None => out.push((name, v)),
+            }
+        }
+        out
+    }
+
     /// Constraint bounds (lower, upper).
     pub fn constraint_bounds_vec(&self) -> (&[f64], &[f64]) {
         (&self.lower_g, &self.upper_g)
@@ -793,13 +867,16 @@ impl NlpProblem for HzdProblem {
         Ok(if self.with_cost {
             self.cost_of_transport(x)
         } else {
-            0.0
+            FEASIBILITY_TORQUE_WEIGHT * self.torque_vars().map(|i| x[i] * x[i]).sum::<f64>()
         })
     }
 
     fn gradient(&self, x: &[f64], gradient: &mut [f64]) -> Result<(), DomainError> {
         gradient.fill(0.0);
         if !self.with_cost {
+            for i in self.torque_vars() {
+                gradient[i] = 2.0 * FEASIBILITY_TORQUE_WEIGHT * x[i];
+            }
             return Ok(());
         }
         let (t_i, d_i) = (self.layout.duration(), self.layout.length());
@@ -881,6 +958,11 @@ impl NlpProblem for HzdProblem {
                     .zip(mu)
                     .map(|(o, m)| o.eps1eps2 * m)
                     .sum::<f64>();
+            }
+        }
+        if !self.with_cost {
+            for &slot in &self.obj_slots.torque {
+                values[slot] += 2.0 * FEASIBILITY_TORQUE_WEIGHT * objective_factor;
             }
         }
         if self.with_cost && objective_factor != 0.0 {

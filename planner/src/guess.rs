@@ -3,11 +3,11 @@
 //! The hip moves forward at constant height from −d/2 to +d/2 over the stance foot; the swing
 //! foot travels from −d to +d on a smooth arc with a mid-step peak; both legs follow by two-link
 //! inverse kinematics; the torso stays upright. Velocities and accelerations are the exact time
-//! derivatives of that motion, torques start at zero, and α is the least-squares Bézier fit of
+//! derivatives of that motion (finite differences), torques the pinned inverse dynamics of it, and α is the least-squares Bézier fit of
 //! the outputs against the phase. It is not dynamically consistent: the solver makes it so.
 
 use crate::biped::PlanarBiped;
-use crate::collocation::{Layout, ACC_SCALE};
+use crate::collocation::{Layout, ACC_SCALE, TORQUE_SCALE};
 use crate::Result;
 use model::bezier::bernstein_weights;
 use model::Side;
@@ -74,20 +74,53 @@ pub fn initial_guess(
         let qp = pose(bp, (s + ds).min(1.0), step_m, thigh_m, shin_m);
         let qm = pose(bp, (s - ds).max(0.0), step_m, thigh_m, shin_m);
         let h = ((s + ds).min(1.0) - (s - ds).max(0.0)) * duration_s;
+        let hs = ds * duration_s;
+        let mut ddq = vec![0.0; layout.nq];
         for i in 0..layout.nq {
             x[layout.q(k) + i] = q[i];
             x[layout.dq(k) + i] = (qp[i] - qm[i]) / h;
-            x[layout.ddq(k) + i] = 0.0 / ACC_SCALE;
+            // Second difference where both neighbours exist, one-sided at the ends.
+            ddq[i] = if k == 0 || k == n - 1 {
+                0.0
+            } else {
+                (qp[i] - 2.0 * q[i] + qm[i]) / (hs * hs)
+            };
+            x[layout.ddq(k) + i] = ddq[i] / ACC_SCALE;
         }
-        for a in 0..layout.nu {
-            x[layout.p(k) + a] = 1.0;
-            x[layout.n(k) + a] = 1.0;
+        // Torques: the pinned-stance inverse dynamics of the guessed motion, projected on the
+        // actuated rows (the torso-pitch row stays unbalanced; the solver fixes it).
+        let dq_now: Vec<f64> = (0..layout.nq).map(|i| x[layout.dq(k) + i]).collect();
+        let [qf, dqf, ddqf] = bp.full_state(&q, &dq_now, &ddq)?;
+        let r = bp.model.inverse_dynamics(&qf, &dqf, &ddqf)?;
+        let jac = bp.stance_jacobian(&qf)?;
+        for (a, &i) in bp.actuators.iter().enumerate() {
+            let c = bp.reduced[i];
+            let u = r[c] - jac[c][0] * r[0] - jac[c][1] * r[1];
+            let limit = bp
+                .model
+                .joints
+                .iter()
+                .find(|j| j.coordinate == c)
+                .map_or(0.0, |j| j.effort_limit);
+            let u = u.clamp(-0.9 * limit, 0.9 * limit);
+            x[layout.u(k) + a] = u / TORQUE_SCALE;
+            let power = u * dq_now[i];
+            x[layout.p(k) + a] = power.max(0.0) + 0.1;
+            x[layout.n(k) + a] = (-power).max(0.0) + 0.1;
         }
-        let zero = vec![0.0; layout.nq];
-        let [qf, _, _] = bp.full_state(&q, &zero, &zero)?;
-        theta[k] = bp.model.stance_leg_angle(&qf, &bp.legs, bp.stance)?;
+        let d = bp
+            .model
+            .stance_leg_angle_derivatives(&qf, &dqf, &ddqf, &bp.legs, bp.stance)?;
+        theta[k] = d.theta;
+        x[layout.tau(k) + 1] = d.rate;
+        x[layout.tau(k) + 2] = d.accel;
     }
     let (tp, tm) = (theta[0], theta[n - 1]);
+    for k in 0..n {
+        x[layout.tau(k)] = (theta[k] - tp) / (tm - tp);
+        x[layout.tau(k) + 1] /= tm - tp;
+        x[layout.tau(k) + 2] /= tm - tp;
+    }
     x[layout.theta_plus()] = tp;
     x[layout.theta_minus()] = tm;
     x[layout.duration()] = duration_s;

@@ -233,6 +233,9 @@ fn ripopt_options(options: &SolveOptions) -> ripopt::SolverOptions {
         max_iter: options.max_iterations,
         print_level: options.print_level,
         max_wall_time: options.max_wall_time.map_or(0.0, |t| t.as_secs_f64()),
+        // Our problems give exact Hessians; ripopt's linearity detection compares Jacobians at
+        // two points and may drop the Hessian of a weakly nonlinear constraint.
+        detect_linear_constraints: false,
         ..ripopt::SolverOptions::default()
     };
     if options.warm_start.is_some() {

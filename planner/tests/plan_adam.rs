@@ -1,0 +1,126 @@
+//! End to end: plan ADAM's gait with the shipped config, and check the problem's derivatives.
+
+use planner::biped::PlanarBiped;
+use planner::collocation::HzdProblem;
+use planner::config::PlannerConfig;
+use planner::guess::initial_guess;
+use planner::nlp::check::check_derivatives;
+use planner::nlp::NlpProblem;
+use planner::plan::plan_gait;
+
+const URDF: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../configs/robots/adam_planar.urdf"
+);
+const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/planner/adam.toml");
+
+fn setup() -> (model::PlanarModel, String, PlannerConfig) {
+    let text = std::fs::read_to_string(URDF).expect("URDF");
+    let model = model::PlanarModel::from_urdf_str(&text, URDF).expect("model");
+    (model, text, PlannerConfig::load(CONFIG).expect("config"))
+}
+
+#[test]
+fn collocation_derivatives_match_finite_differences() {
+    let (model, _, config) = setup();
+    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
+    for with_cost in [false, true] {
+        let probe =
+            HzdProblem::new(bp.clone(), config.clone(), Vec::new(), with_cost).expect("problem");
+        let x = initial_guess(&bp, &probe.layout, 0.25, 0.75).expect("guess");
+        let p = HzdProblem::new(bp.clone(), config.clone(), x.clone(), with_cost).expect("problem");
+        let m = p.num_constraints();
+        let lambda: Vec<f64> = (0..m)
+            .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
+            .collect();
+        let r = check_derivatives(&p, &x, 0.7, &lambda).expect("evaluates");
+        println!("with_cost {with_cost}: {r:?}");
+        // Central differences with the cube-root step: errors near 1e-9 relative are rounding;
+        // a wrong or missing derivative shows up at 1e-3 or above.
+        assert!(r.max_gradient_error < 1e-6, "{r:?}");
+        assert!(r.max_jacobian_error < 1e-6, "{r:?}");
+        assert!(r.max_hessian_error < 1e-5, "{r:?}");
+        assert_eq!(r.jacobian_entries_outside_pattern, 0);
+        assert_eq!(r.hessian_entries_outside_pattern, 0);
+    }
+}
+
+#[test]
+fn plans_a_feasible_gait_inside_table_one_deterministically() {
+    let (model, text, config) = setup();
+    let a = plan_gait(
+        &model,
+        "../robots/adam_planar.urdf",
+        &text,
+        &config,
+        &mut |_| {},
+    )
+    .expect("plans");
+    for s in &a.stages {
+        println!(
+            "{:<18} {:>8} {:>4} iterations, objective {:.6}, violation {:.1e}, {:.3} s",
+            s.stage, s.status, s.iterations, s.objective, s.violation, s.solve_time_s
+        );
+        assert_eq!(s.status, "optimal");
+        assert!(s.violation < 1e-6, "{}: violation {}", s.stage, s.violation);
+    }
+    let g = &a.gait;
+    println!(
+        "step {:.4} m, duration {:.4} s, speed {:.4} m/s, CoT {:.4}",
+        g.step_length_m, g.step_duration_s, g.speed_mps, g.cost_of_transport
+    );
+    let tol = 1e-6;
+    assert!(g.step_length_m >= 0.15 - tol && g.step_length_m <= 0.35 + tol);
+    assert!(g.step_duration_s >= 0.6 - tol && g.step_duration_s <= 0.9 + tol);
+    assert!(g.cost_of_transport > 0.0 && g.cost_of_transport < 1.0);
+    g.validate("planned").expect("valid gait file");
+    // Same config, same gait, bit for bit.
+    let b = plan_gait(
+        &model,
+        "../robots/adam_planar.urdf",
+        &text,
+        &config,
+        &mut |_| {},
+    )
+    .expect("plans");
+    assert_eq!(a.x, b.x);
+}
+
+/// Any planar point-foot biped that follows the naming convention plans: a five-link walker
+/// with different masses, lengths and actuators.
+#[test]
+fn plans_a_second_different_five_link_walker() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/robots/five_link_walker.urdf"
+    );
+    let text = std::fs::read_to_string(path).expect("URDF");
+    let model = model::PlanarModel::from_urdf_str(&text, path).expect("model");
+    assert!(model.design_joints().is_empty());
+    let config = PlannerConfig::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/planner/five_link.toml"
+    ))
+    .expect("config");
+    let a = plan_gait(
+        &model,
+        "../robots/five_link_walker.urdf",
+        &text,
+        &config,
+        &mut |_| {},
+    )
+    .expect("plans");
+    for s in &a.stages {
+        println!(
+            "{:<18} {:>8} {:>4} iterations, violation {:.1e}",
+            s.stage, s.status, s.iterations, s.violation
+        );
+        assert!(s.violation < 1e-6);
+    }
+    let g = &a.gait;
+    println!(
+        "five-link: step {:.4} m, duration {:.4} s, CoT {:.4}",
+        g.step_length_m, g.step_duration_s, g.cost_of_transport
+    );
+    assert!(g.step_length_m >= 0.2 - 1e-6 && g.step_length_m <= 0.5 + 1e-6);
+}
