@@ -42,6 +42,11 @@ enum Command {
         #[arg(long, default_value = "configs/gaits/adam_walk.json")]
         out: PathBuf,
     },
+    /// Gait files: `adam gait check <gait.json>` verifies a gait independently of the optimizer.
+    Gait {
+        #[command(subcommand)]
+        command: GaitCommand,
+    },
     /// Write the URDF of ADAM for a design (GenerateModel: inertias from the cubic fits).
     GenerateUrdf {
         /// Thigh length, m.
@@ -53,6 +58,19 @@ enum Command {
         /// Output file (stdout if absent).
         #[arg(long)]
         out: Option<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum GaitCommand {
+    /// Simulate the closed loop, find the periodic orbit (Newton on the Poincaré map), print its
+    /// eigenvalues; exit non-zero for an unstable or inconsistent gait.
+    Check {
+        /// Gait file.
+        gait: PathBuf,
+        /// ε of the output controller, 1/s.
+        #[arg(long, default_value_t = 10.0)]
+        epsilon: f64,
     },
 }
 
@@ -181,6 +199,31 @@ fn relative_path(target: &std::path::Path, from: &std::path::Path) -> String {
     parts.join("/")
 }
 
+fn gait_check(path: &PathBuf, epsilon: f64) -> Result<()> {
+    let (gait, robot) = planner::verify::load_gait_and_robot(path)?;
+    let options = planner::verify::VerifyOptions {
+        epsilon_per_s: epsilon,
+        ..Default::default()
+    };
+    let report = planner::verify::verify_gait(&robot, &gait, options)?;
+    println!(
+        "gait {} (planned: {:.4} m in {:.4} s)",
+        path.display(),
+        gait.step_length_m,
+        gait.step_duration_s
+    );
+    print!("{report}");
+    if !report.passed(options.fixed_point_tolerance) {
+        bail!(
+            "the gait is unstable or has no periodic orbit (|λ|max {:.4}, residual {:.2e})",
+            report.spectral_radius,
+            report.fixed_point_residual
+        );
+    }
+    println!("stable periodic orbit");
+    Ok(())
+}
+
 fn demo() -> Result<()> {
     let path = PathBuf::from("configs/robots/adam_planar.urdf");
     println!("adam demo: loading {}\n", path.display());
@@ -207,6 +250,9 @@ fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo => demo(),
         Command::Plan { robot, config, out } => plan(&robot, &config, &out),
+        Command::Gait {
+            command: GaitCommand::Check { gait, epsilon },
+        } => gait_check(&gait, epsilon),
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
         Command::GenerateUrdf { thigh, shin, out } => {
             let text = generate_urdf(&DesignLengths {

@@ -32,5 +32,6 @@ mod error;
 pub mod guess;
 pub mod nlp;
 pub mod plan;
+pub mod verify;
 
 pub use error::{PlannerError, Result};

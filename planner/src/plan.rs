@@ -61,6 +61,8 @@ pub enum Progress<'a> {
     Iteration(&'static str, &'a IterationReport),
 }
 
+const FEASIBILITY: &str = "feasibility";
+
 fn solve_stage(
     problem: &HzdProblem,
     stage: &'static str,
@@ -90,7 +92,10 @@ fn solve_stage(
         solve_time_s: sol.statistics.total_time.as_secs_f64(),
         evaluation_time_s: sol.statistics.evaluation_time.as_secs_f64(),
     };
-    if !sol.status.is_success() || violation > 1e-5 {
+    // The feasibility stage only has to deliver a feasible start for the second: a point that
+    // satisfies every constraint is kept even if the solver stopped on a numerical status.
+    let usable = sol.status.is_success() || (stage == FEASIBILITY && violation < 1e-8);
+    if !usable || violation > 1e-5 {
         return Err(PlannerError::NotSolved {
             stage: stage.to_string(),
             status: report.status.clone(),
@@ -127,7 +132,7 @@ pub fn plan_gait(
         nlp::NlpProblem::num_variables(&feasibility),
         nlp::NlpProblem::num_constraints(&feasibility),
     );
-    let (x1, r1) = solve_stage(&feasibility, "feasibility", config, on_progress)?;
+    let (x1, r1) = solve_stage(&feasibility, FEASIBILITY, config, on_progress)?;
     let costed = HzdProblem::new(biped, config.clone(), x1, true)?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
     let gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;

@@ -1,0 +1,446 @@
+//! Independent verification of a gait, not by the optimizer: the closed-loop hybrid system is
+//! simulated with the paper's input–output linearizing controller
+//! `u = −A⁻¹ (L_f² y + 2ε L_f y + ε² y)`, impacts are located by bisection on z_nsf = 0 and mapped
+//! with the model's impact map and relabeling, and the periodic orbit is found by Newton on the
+//! Poincaré map P (post-impact state → next post-impact state).
+//!
+//! - y = y^a − y^d(τ(q), α): the gait's outputs and Bézier coefficients, τ the state-based phase.
+//! - ÿ is affine in u under the pinned-stance dynamics: ÿ = L_f² y + A u; both are computed
+//!   exactly from the model's constrained dynamics (one solve with u = 0 and one per actuator).
+//! - Integration: classic RK4 with a fixed step (default 1 ms); the impact time is bisected to
+//!   1e-12 s inside the step that crosses the guard.
+//! - The Jacobian of P is taken by central finite differences of the simulated map: this is a
+//!   check of the optimizer's result, not part of any solve loop.
+//! - Stability: every eigenvalue of DP at the fixed point has |λ| < 1.
+
+use crate::biped::PlanarBiped;
+use crate::{PlannerError, Result};
+use model::bezier;
+use model::gait::{GaitFile, PhaseDefinition};
+use model::PlanarModel;
+use nalgebra::{DMatrix, DVector};
+use std::fmt;
+
+/// Largest joint difference between the closed-loop fixed point and the planned post-impact
+/// state for the gait to count as the planned one, rad (about 3°: collocation error with N = 20
+/// is near 1e-3 rad; a different orbit is off by tenths of a radian).
+pub const CONSISTENCY_TOLERANCE_RAD: f64 = 0.05;
+
+/// Options of the verification.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VerifyOptions {
+    /// ε of the output controller, 1/s.
+    pub epsilon_per_s: f64,
+    /// RK4 step, s.
+    pub dt_s: f64,
+    /// Newton iterations at most.
+    pub max_newton_iterations: usize,
+    /// Required fixed-point residual (max norm).
+    pub fixed_point_tolerance: f64,
+}
+
+impl Default for VerifyOptions {
+    fn default() -> Self {
+        Self {
+            epsilon_per_s: 10.0,
+            dt_s: 1e-3,
+            max_newton_iterations: 8,
+            fixed_point_tolerance: 1e-6,
+        }
+    }
+}
+
+/// What the verification found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VerifyReport {
+    /// Residual |P(x*) − x*|∞ at the fixed point.
+    pub fixed_point_residual: f64,
+    /// Newton iterations used.
+    pub newton_iterations: usize,
+    /// Eigenvalues of DP at the fixed point, (re, im), sorted by decreasing modulus.
+    pub eigenvalues: Vec<(f64, f64)>,
+    /// Largest |λ|.
+    pub spectral_radius: f64,
+    /// Largest joint difference between the fixed point and the gait's planned x⁺, rad.
+    pub max_joint_difference_rad: f64,
+    /// Largest |y| (joint minus desired output) along the simulated step, rad.
+    pub max_output_error_rad: f64,
+    /// |P(x_plan) − x_plan|∞: how periodic the planned post-impact state is in closed loop.
+    pub planned_state_residual: f64,
+    /// Simulated step duration at the fixed point, s (planned in the gait file).
+    pub step_duration_s: f64,
+    /// Simulated step length, m.
+    pub step_length_m: f64,
+}
+
+impl VerifyReport {
+    /// Stable and consistent: the fixed point exists to `tol`, every |λ| < 1, and the orbit is
+    /// the planned one (joints within [`CONSISTENCY_TOLERANCE_RAD`] of the planned x⁺).
+    pub fn passed(&self, tol: f64) -> bool {
+        self.fixed_point_residual < tol
+            && self.spectral_radius < 1.0
+            && self.max_joint_difference_rad < CONSISTENCY_TOLERANCE_RAD
+    }
+}
+
+impl fmt::Display for VerifyReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "fixed-point residual      {:.3e} ({} Newton iterations)",
+            self.fixed_point_residual, self.newton_iterations
+        )?;
+        writeln!(f, "spectral radius |λ|max    {:.6}", self.spectral_radius)?;
+        let eig: Vec<String> = self
+            .eigenvalues
+            .iter()
+            .map(|(re, im)| {
+                if im.abs() > 1e-12 {
+                    format!("{re:.4}{im:+.4}i")
+                } else {
+                    format!("{re:.4}")
+                }
+            })
+            .collect();
+        writeln!(f, "eigenvalues of DP         {}", eig.join(", "))?;
+        writeln!(
+            f,
+            "max joint diff vs plan    {:.3e} rad",
+            self.max_joint_difference_rad
+        )?;
+        writeln!(
+            f,
+            "max output error |y|      {:.3e} rad",
+            self.max_output_error_rad
+        )?;
+        writeln!(
+            f,
+            "simulated step            {:.4} m in {:.4} s",
+            self.step_length_m, self.step_duration_s
+        )
+    }
+}
+
+/// The closed-loop hybrid system of one gait.
+pub struct ClosedLoop {
+    /// The robot in pinned-stance coordinates.
+    pub biped: PlanarBiped,
+    alpha: Vec<Vec<f64>>,
+    theta_plus: f64,
+    theta_minus: f64,
+    options: VerifyOptions,
+}
+
+/// One simulated step.
+#[derive(Clone, Debug)]
+pub struct Step {
+    /// Post-impact reduced state (q_r, q̇_r) after the relabeling.
+    pub next: DVector<f64>,
+    /// Time to impact, s.
+    pub duration_s: f64,
+    /// Swing-foot x at impact, m.
+    pub length_m: f64,
+    /// Largest |y| along the step, rad.
+    pub max_output_error_rad: f64,
+    /// Swing-foot height at the located impact, m.
+    pub impact_height_m: f64,
+}
+
+impl ClosedLoop {
+    /// Builds the closed loop of `gait` on `model`.
+    pub fn new(model: &PlanarModel, gait: &GaitFile, options: VerifyOptions) -> Result<Self> {
+        let PhaseDefinition::StateBased {
+            theta_plus_rad,
+            theta_minus_rad,
+        } = gait.phase
+        else {
+            return Err(PlannerError::Robot {
+                robot: model.name.clone(),
+                reason: "verification needs a state-based phase".into(),
+            });
+        };
+        let biped = PlanarBiped::new(model.clone(), gait.stance_leg, &[])?;
+        Ok(Self {
+            biped,
+            alpha: gait.bezier.alpha.clone(),
+            theta_plus: theta_plus_rad,
+            theta_minus: theta_minus_rad,
+            options,
+        })
+    }
+
+    fn nq(&self) -> usize {
+        self.biped.nq()
+    }
+
+    /// Joint accelerations q̈_r for torques u (pinned stance, design rigid).
+    fn accelerations(&self, q: &[f64], dq: &[f64], u: &[f64]) -> Result<Vec<f64>> {
+        let bp = &self.biped;
+        let stance_foot = bp.legs.side(bp.stance).foot;
+        let cd = bp.model.constrained_dynamics(q, dq, u, &[stance_foot])?;
+        Ok(bp.reduced.iter().map(|&c| cd.ddq[c]).collect())
+    }
+
+    /// Outputs y, ẏ and ÿ for reduced accelerations `ddqr`.
+    fn outputs(
+        &self,
+        qr: &[f64],
+        dqr: &[f64],
+        ddqr: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let bp = &self.biped;
+        let [q, dq, ddq] = bp.full_state(qr, dqr, ddqr)?;
+        let th = bp
+            .model
+            .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)?;
+        let span = self.theta_minus - self.theta_plus;
+        let tau = (th.theta - self.theta_plus) / span;
+        let (td, tdd) = (th.rate / span, th.accel / span);
+        let m = self.alpha.len();
+        let (mut y, mut dy, mut ddy) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+        for o in 0..m {
+            let (b0, b1, b2) = bezier::eval_all(&self.alpha[o], tau);
+            let j = bp.output_coords[o];
+            y[o] = qr[j] - b0;
+            dy[o] = dqr[j] - b1 * td;
+            ddy[o] = ddqr[j] - b2 * td * td - b1 * tdd;
+        }
+        Ok((y, dy, ddy))
+    }
+
+    /// The closed-loop vector field: (q̇_r, q̈_r) and the torque used.
+    fn field(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        let nq = self.nq();
+        let nu = self.biped.nu();
+        let (qr, dqr) = (&x[..nq], &x[nq..]);
+        let [q, dq, _] = self.biped.full_state(qr, dqr, &vec![0.0; nq])?;
+        let zero_u = vec![0.0; nu];
+        let a0 = self.accelerations(&q, &dq, &zero_u)?;
+        let (y, dy, ddy0) = self.outputs(qr, dqr, &a0)?;
+        let m = y.len();
+        let mut big_a = DMatrix::zeros(m, nu);
+        let mut cols = Vec::with_capacity(nu);
+        for k in 0..nu {
+            let mut u = zero_u.clone();
+            u[k] = 1.0;
+            let ak = self.accelerations(&q, &dq, &u)?;
+            let col: Vec<f64> = ak.iter().zip(&a0).map(|(a, b)| a - b).collect();
+            let (_, _, ddyk) = self.outputs(qr, dqr, &ak)?;
+            for o in 0..m {
+                big_a[(o, k)] = ddyk[o] - ddy0[o];
+            }
+            cols.push(col);
+        }
+        let eps = self.options.epsilon_per_s;
+        let rhs = DVector::from_iterator(
+            m,
+            (0..m).map(|o| -(ddy0[o] + 2.0 * eps * dy[o] + eps * eps * y[o])),
+        );
+        let u = big_a.clone().lu().solve(&rhs).ok_or_else(|| {
+            PlannerError::Solver(format!(
+                "decoupling matrix A is singular at q = {qr:?}: {big_a}"
+            ))
+        })?;
+        let mut ddq = a0;
+        for k in 0..nu {
+            for i in 0..nq {
+                ddq[i] += cols[k][i] * u[k];
+            }
+        }
+        let mut f = dqr.to_vec();
+        f.extend(ddq);
+        Ok((f, u.iter().copied().collect()))
+    }
+
+    fn rk4(&self, x: &[f64], h: f64) -> Result<Vec<f64>> {
+        let add = |a: &[f64], k: &[f64], s: f64| -> Vec<f64> {
+            a.iter().zip(k).map(|(p, q)| p + s * q).collect()
+        };
+        let k1 = self.field(x)?.0;
+        let k2 = self.field(&add(x, &k1, h / 2.0))?.0;
+        let k3 = self.field(&add(x, &k2, h / 2.0))?.0;
+        let k4 = self.field(&add(x, &k3, h))?.0;
+        Ok((0..x.len())
+            .map(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
+            .collect())
+    }
+
+    fn swing_foot(&self, x: &[f64]) -> Result<[f64; 2]> {
+        let nq = self.nq();
+        let [q, _, _] = self
+            .biped
+            .full_state(&x[..nq], &vec![0.0; nq], &vec![0.0; nq])?;
+        Ok(self
+            .biped
+            .model
+            .frame_position(&q, self.biped.legs.side(self.biped.swing()).foot)?)
+    }
+
+    /// Simulates one step from the post-impact reduced state `x0` to the next post-impact state.
+    pub fn step(&self, x0: &[f64]) -> Result<Step> {
+        let nq = self.nq();
+        let dt = self.options.dt_s;
+        let mut x = x0.to_vec();
+        let mut t = 0.0;
+        let mut max_y = 0.0_f64;
+        let max_time = 5.0;
+        loop {
+            let next = self.rk4(&x, dt)?;
+            let z_next = self.swing_foot(&next)?[1];
+            // The guard counts once the swing foot has left the ground and comes back down.
+            if t > 0.1 && z_next < 0.0 {
+                let (mut lo, mut hi) = (0.0, dt);
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if self.swing_foot(&self.rk4(&x, mid)?)?[1] > 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                    if hi - lo < 1e-12 {
+                        break;
+                    }
+                }
+                let s = 0.5 * (lo + hi);
+                let pre = self.rk4(&x, s)?;
+                let foot = self.swing_foot(&pre)?;
+                let bp = &self.biped;
+                let [q, dq, _] = bp.full_state(&pre[..nq], &pre[nq..], &vec![0.0; nq])?;
+                let reset = bp.model.reset_map(&q, &dq, bp.swing())?;
+                let mut next = Vec::with_capacity(2 * nq);
+                next.extend(bp.reduced.iter().map(|&c| reset.q[c]));
+                next.extend(bp.reduced.iter().map(|&c| reset.dq[c]));
+                return Ok(Step {
+                    next: DVector::from_vec(next),
+                    duration_s: t + s,
+                    length_m: foot[0],
+                    max_output_error_rad: max_y,
+                    impact_height_m: foot[1],
+                });
+            }
+            x = next;
+            t += dt;
+            let (y, _, _) = self.outputs(&x[..nq], &x[nq..], &vec![0.0; nq])?;
+            max_y = y.iter().fold(max_y, |m, v| m.max(v.abs()));
+            if t > max_time {
+                return Err(PlannerError::Solver(format!(
+                    "no impact within {max_time} s: the robot does not step"
+                )));
+            }
+        }
+    }
+
+    /// The Poincaré map.
+    pub fn poincare(&self, x: &[f64]) -> Result<DVector<f64>> {
+        Ok(self.step(x)?.next)
+    }
+}
+
+/// Verifies `gait` on `model`: fixed point, eigenvalues, consistency with the plan.
+pub fn verify_gait(
+    model: &PlanarModel,
+    gait: &GaitFile,
+    options: VerifyOptions,
+) -> Result<VerifyReport> {
+    let cl = ClosedLoop::new(model, gait, options)?;
+    let bp = &cl.biped;
+    let nq = bp.nq();
+    let state = gait
+        .initial_state
+        .as_ref()
+        .ok_or_else(|| PlannerError::Robot {
+            robot: model.name.clone(),
+            reason: "the gait file has no initial_state to start the Poincaré map from".into(),
+        })?;
+    let planned: Vec<f64> = bp
+        .reduced
+        .iter()
+        .map(|&c| state.q[c])
+        .chain(bp.reduced.iter().map(|&c| state.dq[c]))
+        .collect();
+    let mut x = DVector::from_vec(planned.clone());
+    let planned_state_residual = (cl.poincare(x.as_slice())? - &x).amax();
+    let n = 2 * nq;
+    let mut iterations = 0;
+    let mut residual;
+    let h = 1e-6;
+    let jacobian = |x: &DVector<f64>| -> Result<DMatrix<f64>> {
+        let mut jac = DMatrix::zeros(n, n);
+        for i in 0..n {
+            let (mut xp, mut xm) = (x.clone(), x.clone());
+            xp[i] += h;
+            xm[i] -= h;
+            let col = (cl.poincare(xp.as_slice())? - cl.poincare(xm.as_slice())?) / (2.0 * h);
+            jac.set_column(i, &col);
+        }
+        Ok(jac)
+    };
+    for _ in 0..options.max_newton_iterations {
+        let px = cl.poincare(x.as_slice())?;
+        let r = &px - &x;
+        residual = r.amax();
+        if residual < options.fixed_point_tolerance * 1e-2 {
+            break;
+        }
+        let jac = jacobian(&x)?;
+        let m = jac - DMatrix::identity(n, n);
+        let dx = m
+            .lu()
+            .solve(&(-r))
+            .ok_or_else(|| PlannerError::Solver("DP − I is singular".into()))?;
+        x += dx;
+        iterations += 1;
+    }
+    let step = cl.step(x.as_slice())?;
+    residual = (&step.next - &x).amax();
+    let jac = jacobian(&x)?;
+    let mut eigenvalues: Vec<(f64, f64)> = jac
+        .complex_eigenvalues()
+        .iter()
+        .map(|c| (c.re, c.im))
+        .collect();
+    eigenvalues.sort_by(|a, b| b.0.hypot(b.1).total_cmp(&a.0.hypot(a.1)));
+    let spectral_radius = eigenvalues.first().map_or(0.0, |e| e.0.hypot(e.1));
+    let max_joint_difference_rad = (1..nq)
+        .map(|i| (x[i] - planned[i]).abs())
+        .fold(0.0, f64::max);
+    Ok(VerifyReport {
+        fixed_point_residual: residual,
+        newton_iterations: iterations,
+        eigenvalues,
+        spectral_radius,
+        planned_state_residual,
+        max_joint_difference_rad,
+        max_output_error_rad: step.max_output_error_rad,
+        step_duration_s: step.duration_s,
+        step_length_m: step.length_m,
+    })
+}
+
+/// Loads a gait file and the robot it names (its URDF path is relative to the gait file's
+/// folder), refusing a URDF whose SHA-256 differs from the one recorded in the gait.
+pub fn load_gait_and_robot(gait_path: &std::path::Path) -> Result<(GaitFile, PlanarModel)> {
+    let gait = GaitFile::load(gait_path)?;
+    let urdf_path = gait_path
+        .parent()
+        .unwrap_or(std::path::Path::new("."))
+        .join(&gait.robot.urdf);
+    let text = std::fs::read_to_string(&urdf_path).map_err(|error| PlannerError::Io {
+        path: urdf_path.display().to_string(),
+        error,
+    })?;
+    let hash = model::gait::sha256_hex(&text);
+    if hash != gait.robot.sha256 {
+        return Err(PlannerError::InvalidField {
+            origin: gait_path.display().to_string(),
+            field: "robot.sha256".into(),
+            value: gait.robot.sha256.clone(),
+            reason: format!(
+                "{} now hashes to {hash}: the robot changed since the gait was planned",
+                urdf_path.display()
+            ),
+        });
+    }
+    let model = PlanarModel::from_urdf_str(&text, &urdf_path.display().to_string())?;
+    Ok((gait, model))
+}

@@ -1,0 +1,92 @@
+//! Independent verification of gaits: the shipped gait is a stable periodic orbit; a broken gait
+//! is rejected; impacts are located on the guard.
+
+use planner::verify::{load_gait_and_robot, verify_gait, ClosedLoop, VerifyOptions};
+use std::path::Path;
+
+const GAIT: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../configs/gaits/adam_walk.json"
+);
+
+#[test]
+fn shipped_gait_is_a_stable_periodic_orbit() {
+    let (gait, robot) = load_gait_and_robot(Path::new(GAIT)).expect("loads");
+    let options = VerifyOptions::default();
+    let report = verify_gait(&robot, &gait, options).expect("verifies");
+    println!("{report}");
+    assert!(report.fixed_point_residual < 1e-6, "{report}");
+    assert!(report.spectral_radius < 1.0, "{report}");
+    // The fixed point lies within 1e-2 rad of the planned post-impact joints (collocation error
+    // with N = 20), and the simulated step is the planned one within 2 mm.
+    assert!(report.max_joint_difference_rad < 1e-2, "{report}");
+    assert!(
+        (report.step_length_m - gait.step_length_m).abs() < 2e-3,
+        "{report}"
+    );
+}
+
+#[test]
+fn impacts_are_located_on_the_guard() {
+    let (gait, robot) = load_gait_and_robot(Path::new(GAIT)).expect("loads");
+    let cl = ClosedLoop::new(&robot, &gait, VerifyOptions::default()).expect("closed loop");
+    let bp = &cl.biped;
+    let s = gait.initial_state.as_ref().expect("initial state");
+    let x: Vec<f64> = bp
+        .reduced
+        .iter()
+        .map(|&c| s.q[c])
+        .chain(bp.reduced.iter().map(|&c| s.dq[c]))
+        .collect();
+    let step = cl.step(&x).expect("steps");
+    // Bisection to 1e-12 s with a foot speed below 1 m/s puts the foot within 1e-11 m of z = 0.
+    assert!(
+        step.impact_height_m.abs() < 1e-11,
+        "impact at z = {}",
+        step.impact_height_m
+    );
+    // The planned start is on the zero-dynamics surface: the outputs stay at zero.
+    assert!(
+        step.max_output_error_rad < 1e-6,
+        "max |y| {}",
+        step.max_output_error_rad
+    );
+    assert!((step.duration_s - gait.step_duration_s).abs() < 1e-2 * gait.step_duration_s);
+}
+
+#[test]
+fn a_gait_with_a_changed_robot_or_broken_outputs_is_rejected() {
+    let dir = std::env::temp_dir().join(format!("adam-verify-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("gaits")).expect("dir");
+    std::fs::create_dir_all(dir.join("robots")).expect("dir");
+    let (gait, _) = load_gait_and_robot(Path::new(GAIT)).expect("loads");
+    let urdf = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/robots/adam_planar.urdf"
+    ))
+    .expect("urdf");
+    std::fs::write(
+        dir.join("robots/adam_planar.urdf"),
+        urdf.replace("13.33", "14.33"),
+    )
+    .expect("write");
+    gait.save(dir.join("gaits/g.json")).expect("save");
+    let e = load_gait_and_robot(&dir.join("gaits/g.json")).expect_err("hash mismatch");
+    assert!(e.to_string().contains("robot.sha256"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+
+    // Shifting the swing hip's desired trajectory by 0.3 rad gives another gait than the plan (or
+    // none): the check must not pass it.
+    let (mut gait, robot) = load_gait_and_robot(Path::new(GAIT)).expect("loads");
+    for a in &mut gait.bezier.alpha[2] {
+        *a += 0.3;
+    }
+    let verdict = verify_gait(&robot, &gait, VerifyOptions::default());
+    if let Ok(r) = &verdict {
+        println!("{r}");
+    }
+    assert!(
+        !verdict.is_ok_and(|r| r.passed(1e-6)),
+        "a shifted swing-hip trajectory must not verify"
+    );
+}
