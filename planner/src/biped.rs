@@ -138,7 +138,7 @@ impl PlanarBiped {
             dq[k] = -v[k];
             ddq[k] = -a[k];
         }
-        debug_assert!(BASE_DOF == 3);
+        const { assert!(BASE_DOF == 3) };
         Ok([q, dq, ddq])
     }
 

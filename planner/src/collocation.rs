@@ -41,6 +41,9 @@ use model::num_dual::{Dual64, HyperDual64};
 use model::Real;
 use std::collections::HashMap;
 
+/// Two lists of (row, column) index pairs (a block's Jacobian and Hessian patterns).
+type BlockPatterns = (Vec<(usize, usize)>, Vec<(usize, usize)>);
+
 /// q̈ = `ACC_SCALE` × its variable.
 pub const ACC_SCALE: f64 = 10.0;
 /// u = `TORQUE_SCALE` × its variable.
@@ -401,7 +404,7 @@ impl HzdProblem {
 
     fn build_patterns(&mut self) {
         let x = self.probe_point();
-        let mut cache: HashMap<Kind, (Vec<(usize, usize)>, Vec<(usize, usize)>)> = HashMap::new();
+        let mut cache: HashMap<Kind, BlockPatterns> = HashMap::new();
         let mut hess_index: HashMap<(usize, usize), usize> = HashMap::new();
         let mut hess = SparsityPattern::default();
         let mut slot = |r: usize, c: usize, hess: &mut SparsityPattern| -> usize {
@@ -448,7 +451,7 @@ impl HzdProblem {
     }
 
     /// Structural Jacobian entries and Hessian pairs of a block at the probe point.
-    fn detect(&self, blk: &Block, x: &[f64]) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
+    fn detect(&self, blk: &Block, x: &[f64]) -> BlockPatterns {
         let nv = blk.vars.len();
         let z: Vec<f64> = blk.vars.iter().map(|&i| x[i]).collect();
         let mut jac = Vec::new();

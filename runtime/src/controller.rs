@@ -409,6 +409,9 @@ fn min_jerk(u: f64) -> (f64, f64) {
     )
 }
 
+/// How well the planned initial pitch is known when walking starts from the planned state, rad.
+const PLANNED_PITCH_SIGMA_RAD: f64 = 0.002;
+
 /// Peak of ds/du of [`min_jerk`].
 const MIN_JERK_PEAK_RATE: f64 = 1.875;
 
@@ -563,7 +566,8 @@ impl Controller {
             return false;
         }
         if let Some((pitch_rad, rate_rad_s)) = self.gait.initial_pitch {
-            self.estimator.initialize(pitch_rad, rate_rad_s);
+            self.estimator
+                .initialize(pitch_rad, rate_rad_s, PLANNED_PITCH_SIGMA_RAD);
         }
         self.stance = self.gait.first_stance;
         self.step_start_t_s = t_s;

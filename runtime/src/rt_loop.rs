@@ -399,16 +399,14 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     let (mut bus_errors, mut missing) = (0u64, 0u64);
     let log_every = u64::from(config.telemetry.log_every_n_ticks);
     let mut tracking = TrackingStats::default();
-    if options.start_walking {
-        if controller.begin_walk_at_step_start(0.0, &mut out.status) {
-            transitions.push((0.0, ControlState::Idle, ControlState::Walk));
-            if let Some(tx) = log_tx.as_mut() {
-                tx.push(LogRecord::Transition {
-                    t_s: 0.0,
-                    from: ControlState::Idle,
-                    to: ControlState::Walk,
-                });
-            }
+    if options.start_walking && controller.begin_walk_at_step_start(0.0, &mut out.status) {
+        transitions.push((0.0, ControlState::Idle, ControlState::Walk));
+        if let Some(tx) = log_tx.as_mut() {
+            tx.push(LogRecord::Transition {
+                t_s: 0.0,
+                from: ControlState::Idle,
+                to: ControlState::Walk,
+            });
         }
     }
     let t0 = clock.now_s();
