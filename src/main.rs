@@ -20,8 +20,33 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// The main job on the simulated robot (today: the parts that exist, and what does not yet).
+    /// Walk the shipped gait for 30 s on the simulated treadmill through the CAN codec path,
+    /// log to logs/<timestamp>.mcap, print a summary.
     Demo,
+    /// Walk a gait with the real-time runtime on the simulated robot or on the robot over CAN.
+    Run {
+        /// Where to walk.
+        #[arg(long, value_enum)]
+        backend: Backend,
+        /// Gait file (JSON).
+        #[arg(long, default_value = "configs/gaits/adam_walk.json")]
+        gait: PathBuf,
+        /// Runtime config (TOML).
+        #[arg(long, default_value = "configs/runtime/adam.toml")]
+        config: PathBuf,
+        /// Run time, e.g. `30s`, `1500ms` or `30` (seconds).
+        #[arg(long, default_value = "30s", value_parser = parse_duration_s)]
+        duration: f64,
+        /// Treadmill belt speed, m/s (sim; default: the gait's speed).
+        #[arg(long)]
+        belt: Option<f64>,
+        /// MCAP log file (sim; default: no log).
+        #[arg(long)]
+        log: Option<PathBuf>,
+        /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
+        #[arg(long, value_delimiter = ',')]
+        can_interfaces: Option<Vec<String>>,
+    },
     /// Print a robot model: bodies, joints, total mass, leg lengths and D(q) at the nominal pose.
     Model {
         /// URDF file.
@@ -72,6 +97,78 @@ enum GaitCommand {
         #[arg(long, default_value_t = 10.0)]
         epsilon: f64,
     },
+}
+
+/// Backend of `adam run`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Backend {
+    /// The simulated ADAM on a treadmill behind the simulated A1 firmware and CAN codec.
+    Sim,
+    /// The robot over SocketCAN.
+    Can,
+}
+
+/// Parses `30s`, `1500ms` or `30` into seconds.
+fn parse_duration_s(text: &str) -> Result<f64, String> {
+    let t = text.trim();
+    let (number, scale) = if let Some(ms) = t.strip_suffix("ms") {
+        (ms, 1e-3)
+    } else if let Some(s) = t.strip_suffix('s') {
+        (s, 1.0)
+    } else {
+        (t, 1.0)
+    };
+    let v: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a duration (expected e.g. 30s, 1500ms)"))?;
+    let seconds = v * scale;
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(format!("'{text}': the duration must be positive"));
+    }
+    Ok(seconds)
+}
+
+/// `logs/<UTC timestamp>.mcap`, e.g. `logs/20250101-120000.mcap`.
+fn timestamped_log_path() -> PathBuf {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
+    // Civil date from days since 1970-01-01 (Howard Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    PathBuf::from(format!(
+        "logs/{year:04}{month:02}{day:02}-{:02}{:02}{:02}.mcap",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    ))
+}
+
+/// Walk in simulation and print the report.
+fn sim_walk(setup: &runtime::Setup, options: &runtime::sim_run::SimWalkOptions) -> Result<()> {
+    if let Some(dir) = options.log_path.as_ref().and_then(|p| p.parent()) {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+    }
+    let report = runtime::sim_run::walk(setup, options)?;
+    println!("{report}");
+    if let (Some(path), Some(log)) = (&options.log_path, &report.summary.log) {
+        println!("log: {} ({log:?})", path.display());
+    }
+    if let Some((t_s, what)) = report.fall {
+        bail!("the robot fell ({what:?}) at {t_s:.3} s");
+    }
+    Ok(())
 }
 
 /// Parses `thigh=0.24,shin=0.25`.
@@ -225,15 +322,21 @@ fn gait_check(path: &PathBuf, epsilon: f64) -> Result<()> {
 }
 
 fn demo() -> Result<()> {
-    let path = PathBuf::from("configs/robots/adam_planar.urdf");
-    println!("adam demo: loading {}\n", path.display());
-    show_model(&path, None)?;
+    let gait = PathBuf::from("configs/gaits/adam_walk.json");
+    let config = PathBuf::from("configs/runtime/adam.toml");
+    let setup = runtime::Setup::load(&config, &gait)?;
+    let g = &setup.gait;
     println!(
-        "\nNot built yet: the gait planner (issue \"Planner I\"), the CAN drivers and the simulated\n\
-         treadmill (\"Drivers\"), and the real-time runtime (\"Runtime\"). When they land, `demo`\n\
-         plans or loads the shipped gait and walks it for 30 s on the simulated robot."
+        "adam demo: {} (step {:.4} m, {:.4} s, {:.4} m/s) with {}, 30 s on the simulated treadmill via SimBus (A1 CAN codec)",
+        gait.display(),
+        g.step_length_m,
+        g.step_duration_s,
+        g.speed_mps,
+        config.display()
     );
-    Ok(())
+    let mut options = runtime::sim_run::SimWalkOptions::new(30.0);
+    options.log_path = Some(timestamped_log_path());
+    sim_walk(&setup, &options)
 }
 
 fn main() -> std::process::ExitCode {
@@ -249,6 +352,32 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo => demo(),
+        Command::Run {
+            backend,
+            gait,
+            config,
+            duration,
+            belt,
+            log,
+            can_interfaces,
+        } => {
+            let setup = runtime::Setup::load(&config, &gait)?;
+            match backend {
+                Backend::Sim => {
+                    let mut options = runtime::sim_run::SimWalkOptions::new(duration);
+                    options.belt_speed_mps = belt;
+                    options.log_path = log;
+                    sim_walk(&setup, &options)
+                }
+                Backend::Can => {
+                    let interfaces = can_interfaces
+                        .unwrap_or_else(|| runtime::robot::default_interfaces(&setup));
+                    let summary = runtime::robot::walk(&setup, &interfaces, duration)?;
+                    println!("{summary:?}");
+                    Ok(())
+                }
+            }
+        }
         Command::Plan { robot, config, out } => plan(&robot, &config, &out),
         Command::Gait {
             command: GaitCommand::Check { gait, epsilon },

@@ -323,6 +323,8 @@ struct GaitTable {
     theta_minus_rad: f64,
     step_duration_s: f64,
     first_stance: Side,
+    /// Planned torso pitch and pitch rate at the start of the step (from `initial_state`).
+    initial_pitch: Option<(f64, f64)>,
 }
 
 fn side_index(s: Side) -> usize {
@@ -384,6 +386,10 @@ impl GaitTable {
             theta_minus_rad,
             step_duration_s: gait.step_duration_s,
             first_stance: gait.stance_leg,
+            initial_pitch: gait
+                .initial_state
+                .as_ref()
+                .and_then(|s| Some((*s.q.get(2)?, *s.dq.get(2)?))),
         })
     }
 
@@ -402,6 +408,9 @@ fn min_jerk(u: f64) -> (f64, f64) {
         30.0 * u2 * (1.0 - 2.0 * u + u2),
     )
 }
+
+/// How well the planned initial pitch is known when walking starts from the planned state, rad.
+const PLANNED_PITCH_SIGMA_RAD: f64 = 0.002;
 
 /// Peak of ds/du of [`min_jerk`].
 const MIN_JERK_PEAK_RATE: f64 = 1.875;
@@ -545,6 +554,27 @@ impl Controller {
     /// The latched trip, if any.
     pub fn trip(&self) -> Option<Trip> {
         self.trip
+    }
+
+    /// Enter Walk at `t_s` with the gait's first stance leg, as if the previous step had just
+    /// ended: for a backend that starts in the gait's planned post-impact state (a simulator set
+    /// to the gait file's `initial_state`), where Ramp and Stand would have no meaning. The pitch
+    /// estimator starts from the planned pitch: mid-step, the accelerometer does not see gravity
+    /// alone. Only from Idle with no latched trip; returns whether Walk was entered.
+    pub fn begin_walk_at_step_start(&mut self, t_s: f64, status: &mut Status) -> bool {
+        if self.state != ControlState::Idle || self.trip.is_some() {
+            return false;
+        }
+        if let Some((pitch_rad, rate_rad_s)) = self.gait.initial_pitch {
+            self.estimator
+                .initialize(pitch_rad, rate_rad_s, PLANNED_PITCH_SIGMA_RAD);
+        }
+        self.stance = self.gait.first_stance;
+        self.step_start_t_s = t_s;
+        self.touchdown_ticks = 0;
+        self.steps = 0;
+        self.enter(ControlState::Walk, status);
+        true
     }
 
     /// The gait's first pose by slot (motor side for every slot), as Ramp targets it.

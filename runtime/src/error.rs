@@ -49,6 +49,12 @@ pub enum RuntimeError {
     /// The motor bus failed during start-up or shutdown.
     #[error("motor bus: {0}")]
     Bus(#[from] drivers::bus::BusError),
+    /// A CAN interface of the robot could not be opened.
+    #[error(transparent)]
+    CanOpen(#[from] drivers::socketcan_bus::OpenError),
+    /// The robot backend needs a torso IMU driver, and none exists yet.
+    #[error("no IMU driver for the robot's torso IMU yet: the CAN buses opened, but the loop needs pitch and pitch rate")]
+    NoImuDriver,
     /// The MCAP writer failed.
     #[error("MCAP log {path}: {message}")]
     Log {

@@ -66,6 +66,17 @@ impl PitchEstimator {
         }
     }
 
+    /// Start from a known pitch and rate instead of the first accelerometer sample (a robot
+    /// started in a known moving state, whose accelerometer does not see gravity alone).
+    /// `pitch_sigma_rad` is how well that pitch is known.
+    pub fn initialize(&mut self, pitch_rad: f64, rate_rad_s: f64, pitch_sigma_rad: f64) {
+        self.pitch_rad = pitch_rad;
+        self.rate_rad_s = rate_rad_s;
+        self.p[0] = [pitch_sigma_rad * pitch_sigma_rad, 0.0];
+        self.p[1][0] = 0.0;
+        self.initialized = true;
+    }
+
     /// Whether a first sample has been seen.
     pub fn is_initialized(&self) -> bool {
         self.initialized

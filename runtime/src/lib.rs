@@ -16,6 +16,8 @@
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
 //! | [`telemetry`] | `#[repr(C)]` [`telemetry::StateSample`], published over iceoryx2 (feature `iceoryx2`, default) |
 //! | [`log`] | MCAP writer thread fed by a wait-free queue; drops counted |
+//! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
+//! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth |
 //!
 //! ## Data flow of one tick
 //! ```text
@@ -62,9 +64,11 @@ pub mod estimator;
 pub mod io;
 pub mod log;
 pub mod operator;
+pub mod robot;
 pub mod rt_loop;
 mod rt_sys;
 pub mod safety;
+pub mod sim_run;
 pub mod telemetry;
 
 pub use error::{Result, RuntimeError};

@@ -17,7 +17,7 @@
 
 use crate::controller::{
     CommandMode, ControlState, Controller, JointCommand, MotorSample, OperatorCommand, TickInput,
-    TickOutput, LEG_SLOTS, SLOTS,
+    TickOutput, LEG_SLOTS, OUTPUTS, SLOTS,
 };
 use crate::io::Imu;
 use crate::log::{LogContext, LogRecord, LogStats};
@@ -82,6 +82,9 @@ pub struct LoopOptions {
     pub publish: bool,
     /// Ask for mlockall / SCHED_FIFO as the config says (off for simulation and tests).
     pub realtime: bool,
+    /// Begin in Walk at the first tick (see [`Controller::begin_walk_at_step_start`]): only for
+    /// a backend that starts in the gait's planned post-impact state.
+    pub start_walking: bool,
 }
 
 impl LoopOptions {
@@ -94,6 +97,7 @@ impl LoopOptions {
             log_path: None,
             publish: false,
             realtime: false,
+            start_walking: false,
         }
     }
 }
@@ -116,6 +120,48 @@ pub struct TickTimes {
     pub p99_ns: u64,
     /// Maximum.
     pub max_ns: u64,
+}
+
+/// Output tracking over the ticks spent in Walk: `y^d − y^a` per output (stance hip, stance
+/// knee, swing hip, swing knee).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TrackingStats {
+    /// Ticks that ended in Walk.
+    pub walk_ticks: u64,
+    /// Σ (y^d − y^a)² per output, rad².
+    pub sum_sq_rad2: [f64; OUTPUTS],
+    /// max |y^d − y^a| per output, rad.
+    pub max_abs_rad: [f64; OUTPUTS],
+}
+
+impl TrackingStats {
+    fn add(&mut self, status: &crate::controller::Status) {
+        self.walk_ticks += 1;
+        for i in 0..OUTPUTS {
+            let e = status.y_des_rad[i] - status.y_act_rad[i];
+            self.sum_sq_rad2[i] += e * e;
+            self.max_abs_rad[i] = self.max_abs_rad[i].max(e.abs());
+        }
+    }
+
+    /// RMS error of output `i` over the Walk ticks, rad (NaN without Walk ticks).
+    pub fn rms_rad(&self, i: usize) -> f64 {
+        (self.sum_sq_rad2[i] / self.walk_ticks as f64).sqrt()
+    }
+
+    /// RMS error of the hips (stance and swing together), deg.
+    pub fn hip_rms_deg(&self) -> f64 {
+        self.pair_rms_rad(0, 2).to_degrees()
+    }
+
+    /// RMS error of the knees (stance and swing together), deg.
+    pub fn knee_rms_deg(&self) -> f64 {
+        self.pair_rms_rad(1, 3).to_degrees()
+    }
+
+    fn pair_rms_rad(&self, a: usize, b: usize) -> f64 {
+        ((self.sum_sq_rad2[a] + self.sum_sq_rad2[b]) / (2 * self.walk_ticks) as f64).sqrt()
+    }
 }
 
 /// What a run did.
@@ -143,6 +189,8 @@ pub struct RunSummary {
     pub last_sample: StateSample,
     /// Controller tick compute time.
     pub tick_times: TickTimes,
+    /// Output tracking while walking.
+    pub tracking: TrackingStats,
     /// Log statistics, if logging.
     pub log: Option<LogStats>,
     /// Telemetry samples that could not be published.
@@ -350,6 +398,17 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     let (mut overruns, mut streak, mut max_streak) = (0u64, 0u32, 0u32);
     let (mut bus_errors, mut missing) = (0u64, 0u64);
     let log_every = u64::from(config.telemetry.log_every_n_ticks);
+    let mut tracking = TrackingStats::default();
+    if options.start_walking && controller.begin_walk_at_step_start(0.0, &mut out.status) {
+        transitions.push((0.0, ControlState::Idle, ControlState::Walk));
+        if let Some(tx) = log_tx.as_mut() {
+            tx.push(LogRecord::Transition {
+                t_s: 0.0,
+                from: ControlState::Idle,
+                to: ControlState::Walk,
+            });
+        }
+    }
     let t0 = clock.now_s();
     let mut deadline = t0;
 
@@ -414,6 +473,9 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
             p.publish(&sample);
         }
         let status = &out.status;
+        if status.state == ControlState::Walk {
+            tracking.add(status);
+        }
         if let Some((from, to)) = status.transition {
             if transitions.len() < transitions.capacity() {
                 transitions.push((t, from, to));
@@ -467,6 +529,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         transitions,
         last_sample: sample,
         tick_times: histogram.times(),
+        tracking,
         log,
         publish_failures,
         realtime,

@@ -377,6 +377,18 @@ impl RobotSim {
     /// projected onto their constraints. Design coordinates keep the values given, with zero
     /// velocity. Clears the fall flag and the penetration record, keeps time and events.
     pub fn set_state(&mut self, q: &[f64], dq: &[f64]) -> Result<()> {
+        self.set_state_with_stance(q, dq, None)
+    }
+
+    /// Like [`RobotSim::set_state`], but only the foot of `stance` may become a stance foot:
+    /// the other foot starts in the air even on the ground, keeping its velocity. For a
+    /// post-impact state (the old stance foot lifting off at `z = 0`), which `set_state` would
+    /// pin and so project away the planned velocities.
+    pub fn set_state_single_stance(&mut self, q: &[f64], dq: &[f64], stance: Side) -> Result<()> {
+        self.set_state_with_stance(q, dq, Some(side_index(stance)))
+    }
+
+    fn set_state_with_stance(&mut self, q: &[f64], dq: &[f64], only: Option<usize>) -> Result<()> {
         let n = self.model.dof();
         for (what, v) in [("q", q), ("dq", dq)] {
             if v.len() != n {
@@ -401,7 +413,8 @@ impl RobotSim {
                     depth_m: -p[1],
                 });
             }
-            self.contact[i] = if p[1] <= PENETRATION_TOLERANCE_M {
+            let may_stand = only.is_none_or(|k| k == i);
+            self.contact[i] = if may_stand && p[1] <= PENETRATION_TOLERANCE_M {
                 Contact::Stance {
                     anchor_xz_m: [p[0], 0.0],
                 }
