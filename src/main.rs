@@ -296,7 +296,7 @@ fn relative_path(target: &std::path::Path, from: &std::path::Path) -> String {
     parts.join("/")
 }
 
-fn gait_check(path: &PathBuf, epsilon: f64) -> Result<()> {
+fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
     let (gait, robot) = planner::verify::load_gait_and_robot(path)?;
     let options = planner::verify::VerifyOptions {
         epsilon_per_s: epsilon,
