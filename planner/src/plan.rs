@@ -46,6 +46,8 @@ pub struct PlannedGait {
     pub stages: Vec<StageReport>,
     /// The final NLP point.
     pub x: Vec<f64>,
+    /// The feasibility stage's point (the start of the cost-of-transport solve).
+    pub feasible_x: Vec<f64>,
     /// Variables and constraints of the NLP.
     pub size: (usize, usize),
     /// Set-up time (problem construction, sparsity detection), s.
@@ -62,6 +64,17 @@ pub enum Progress<'a> {
 }
 
 const FEASIBILITY: &str = "feasibility";
+
+/// The cost-of-transport solve alone, from a feasible point (for warm re-plans and tests).
+pub fn solve_cost_stage(
+    model: &PlanarModel,
+    config: &PlannerConfig,
+    feasible_x: Vec<f64>,
+) -> Result<Vec<f64>> {
+    let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
+    let costed = HzdProblem::new(biped, config.clone(), feasible_x, true)?;
+    Ok(solve_stage(&costed, "cost of transport", config, &mut |_| {})?.0)
+}
 
 fn solve_stage(
     problem: &HzdProblem,
@@ -133,13 +146,14 @@ pub fn plan_gait(
         nlp::NlpProblem::num_constraints(&feasibility),
     );
     let (x1, r1) = solve_stage(&feasibility, FEASIBILITY, config, on_progress)?;
-    let costed = HzdProblem::new(biped, config.clone(), x1, true)?;
+    let costed = HzdProblem::new(biped, config.clone(), x1.clone(), true)?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
     let gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
     Ok(PlannedGait {
         gait,
         stages: vec![r1, r2],
         x,
+        feasible_x: x1,
         size,
         setup_time_s,
     })
