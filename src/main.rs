@@ -277,6 +277,18 @@ fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
         g.step_length_m, g.step_duration_s, g.speed_mps, g.cost_of_transport
     );
     println!("wrote {}", out.display());
+    let report =
+        planner::verify::verify_gait(&model, g, planner::verify::VerifyOptions::default())?;
+    println!(
+        "verification (adam gait check): |λ|max {:.4}, fixed-point residual {:.1e}, {}",
+        report.spectral_radius,
+        report.fixed_point_residual,
+        if report.passed(1e-6) {
+            "stable periodic orbit"
+        } else {
+            "NOT a stable orbit of the plan"
+        }
+    );
     Ok(())
 }
 

@@ -1044,9 +1044,11 @@ mod tests {
             h.step(Some(OperatorCommand::Walk)).state,
             ControlState::Walk
         );
+        let step_s = Setup::shipped().unwrap().gait.step_duration_s;
         let mut switches = Vec::new();
         let mut prev = stance0;
-        for _ in 0..1300 {
+        // Ticks at 1 kHz for a little over two steps.
+        for _ in 0..(2.15 * step_s * 1000.0) as usize {
             let s = h.step(None);
             if s.stance != prev {
                 switches.push(h.input.t_s);
@@ -1055,8 +1057,8 @@ mod tests {
         }
         assert_eq!(switches.len(), 2, "{switches:?}");
         let period = switches[1] - switches[0];
-        // Step T = 0.6001 s; touchdown needs τ ≥ 1 then 3 debounced ticks.
-        assert!((period - (0.6001 + 0.003)).abs() < 1.5e-3, "{period}");
+        // Step T from the shipped gait; touchdown needs τ ≥ 1 then 3 debounced ticks.
+        assert!((period - (step_s + 0.003)).abs() < 1.5e-3, "{period}");
         assert_eq!(h.out.status.steps, 2);
         // Stop: finish the step, then Stand on the new stance leg.
         let stance_before = h.c.stance();
@@ -1064,7 +1066,7 @@ mod tests {
             h.step(Some(OperatorCommand::Stop)).state,
             ControlState::Stop
         );
-        let s = h.run(0.7);
+        let s = h.run(step_s + 0.1);
         assert_eq!(s.state, ControlState::Stand);
         assert_eq!(s.stance, stance_before.other());
         // Orderly damping, then reset.
@@ -1107,12 +1109,15 @@ mod tests {
         h.step(Some(OperatorCommand::Walk));
         let s = h.run(0.3);
         let tau = s.phase;
-        assert!((tau - 0.3 / 0.600_129_776).abs() < 3e-3, "{tau}");
         let setup = Setup::shipped().unwrap();
+        assert!(
+            (tau - 0.3 / setup.gait.step_duration_s).abs() < 3e-3,
+            "{tau}"
+        );
         for i in 0..OUTPUTS {
             let a = &setup.gait.bezier.alpha[i];
             assert!((s.y_des_rad[i] - bezier::eval(a, tau)).abs() < 1e-12);
-            let dy = bezier::eval_d1(a, tau) / 0.600_129_776;
+            let dy = bezier::eval_d1(a, tau) / setup.gait.step_duration_s;
             assert!((s.dy_des_rad_s[i] - dy).abs() < 1e-9);
         }
         // The gait's stance leg is right: stance hip is slot 2.
@@ -1120,7 +1125,7 @@ mod tests {
         assert_eq!(h.out.commands[2].q_des_rad, s.y_des_rad[0]);
         assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[2]);
         // After the switch the left leg stands: stance hip is slot 0.
-        let s = h.run(0.4);
+        let s = h.run(setup.gait.step_duration_s - 0.3 + 0.1);
         assert_eq!(s.stance, Side::Left);
         assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[0]);
         assert_eq!(h.out.commands[3].q_des_rad, s.y_des_rad[3]);
