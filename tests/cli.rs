@@ -94,13 +94,13 @@ fn run_rejects_a_bad_duration() {
 }
 
 #[test]
-fn sim_run_reports_steps_tracking_and_the_fall() {
-    // The shipped gait falls after about 1 s (see tests/walk_sim.rs); the report must say so.
-    let (ok, out, err) = adam(&["run", "--backend", "sim", "--duration", "2s"]);
+fn sim_run_reports_steps_and_tracking() {
+    let (ok, out, err) = adam(&["run", "--backend", "sim", "--duration", "3s"]);
+    assert!(ok, "{out}\n{err}");
     assert!(
         out.contains("steps ") && out.contains("tracking RMS: hip"),
         "{out}"
     );
+    assert!(out.contains("falls: none"), "{out}");
     assert!(out.contains("tick compute time: median"), "{out}");
-    assert!(!ok && err.contains("the robot fell"), "{err}");
 }

@@ -5,15 +5,15 @@
 //! probe seed, so the same model and config give the same gait bit for bit.
 
 use crate::biped::PlanarBiped;
-use crate::collocation::HzdProblem;
+use crate::collocation::{HzdProblem, TORQUE_SCALE};
 use crate::config::PlannerConfig;
 use crate::guess::initial_guess;
 use crate::nlp::{self, IterationControl, IterationReport, SolveOptions};
 use crate::{PlannerError, Result};
 use model::design::DesignLengths;
 use model::gait::{
-    sha256_hex, BezierSpec, GaitFile, PhaseDefinition, RobotReference, RobotState, SolverSummary,
-    GAIT_SCHEMA_VERSION,
+    sha256_hex, BezierSpec, FeedforwardTable, GaitFile, PhaseDefinition, RobotReference,
+    RobotState, SolverSummary, GAIT_SCHEMA_VERSION,
 };
 use model::PlanarModel;
 use std::time::Instant;
@@ -148,7 +148,14 @@ pub fn plan_gait(
     let (x1, r1) = solve_stage(&feasibility, FEASIBILITY, config, on_progress)?;
     let costed = HzdProblem::new(biped, config.clone(), x1.clone(), true)?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
-    let gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
+    let mut gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
+    // The runtime's feed-forward: the torques along the closed-loop orbit (finer and more
+    // faithful than the collocation points' torques that gait_from_solution records).
+    gait.feedforward = Some(crate::verify::feedforward_from_orbit(
+        model,
+        &gait,
+        crate::verify::VerifyOptions::default(),
+    )?);
     Ok(PlannedGait {
         gait,
         stages: vec![r1, r2],
@@ -157,6 +164,37 @@ pub fn plan_gait(
         size,
         setup_time_s,
     })
+}
+
+/// The planned torque of each output's joint at every collocation point, by phase: the
+/// runtime's feed-forward term. Points whose phase does not increase (never at an optimum) are
+/// skipped so the table stays strictly increasing.
+pub fn feedforward_table(problem: &HzdProblem, x: &[f64]) -> FeedforwardTable {
+    let l = &problem.layout;
+    let bp = &problem.biped;
+    let mut table = FeedforwardTable {
+        phase: Vec::with_capacity(l.points()),
+        torque_nm: Vec::with_capacity(l.points()),
+    };
+    for k in 0..l.points() {
+        let tau = x[l.tau(k)];
+        if table.phase.last().is_some_and(|t| tau <= *t) {
+            continue;
+        }
+        let row = bp
+            .output_coords
+            .iter()
+            .map(|&c| {
+                bp.actuators
+                    .iter()
+                    .position(|&a| a == c)
+                    .map_or(0.0, |i| TORQUE_SCALE * x[l.u(k) + i])
+            })
+            .collect();
+        table.phase.push(tau);
+        table.torque_nm.push(row);
+    }
+    table
 }
 
 /// The gait file for the NLP point `x`.
@@ -204,6 +242,7 @@ pub fn gait_from_solution(
         speed_mps: length / duration,
         cost_of_transport: problem.cost_of_transport(x),
         initial_state: Some(RobotState { q, dq }),
+        feedforward: Some(feedforward_table(problem, x)),
         solver: SolverSummary {
             solver: "ripopt 0.8 interior point via planner::nlp".into(),
             status: stages.last().map(|s| s.status.clone()).unwrap_or_default(),

@@ -1,7 +1,9 @@
 //! Independent verification of gaits: the shipped gait is a stable periodic orbit; a broken gait
 //! is rejected; impacts are located on the guard.
 
-use planner::verify::{load_gait_and_robot, verify_gait, ClosedLoop, VerifyOptions};
+use planner::verify::{
+    load_gait_and_robot, verify_gait, verify_gait_with, ClosedLoop, Law, VerifyOptions,
+};
 use std::path::Path;
 
 const GAIT: &str = concat!(
@@ -89,4 +91,36 @@ fn a_gait_with_a_changed_robot_or_broken_outputs_is_rejected() {
         !verdict.is_ok_and(|r| r.passed(1e-6)),
         "a shifted swing-hip trajectory must not verify"
     );
+}
+
+/// The runtime drives the outputs with joint PD, not the paper's input–output linearization:
+/// with the plan's torques as feed-forward the gait stays a stable periodic orbit under the
+/// runtime's default gains, and without them the robot loses speed every step and stops.
+#[test]
+fn shipped_gait_needs_its_feedforward_under_joint_pd() {
+    let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
+    let ff = gait
+        .feedforward
+        .as_ref()
+        .expect("the shipped gait has a feed-forward table");
+    let table: Vec<(f64, Vec<f64>)> = ff
+        .phase
+        .iter()
+        .copied()
+        .zip(ff.torque_nm.iter().cloned())
+        .collect();
+    let pd = |feedforward| Law::JointPd {
+        kp_nm_per_rad: 300.0,
+        kd_nm_s_per_rad: 6.0,
+        feedforward,
+    };
+    let options = VerifyOptions::default();
+    let report = verify_gait_with(&model, &gait, options, pd(table)).expect("PD closed loop");
+    println!("joint PD 300/6 + planned feed-forward:\n{report}");
+    assert!(report.passed(options.fixed_point_tolerance), "{report}");
+    // Without feed-forward there is no periodic orbit near the plan.
+    match verify_gait_with(&model, &gait, options, pd(Vec::new())) {
+        Ok(r) => assert!(!r.passed(options.fixed_point_tolerance), "{r}"),
+        Err(e) => println!("PD only: {e}"),
+    }
 }
