@@ -49,6 +49,21 @@ fn walks_the_gait_30_s_without_a_fall_at_the_planned_step_length() {
         "knee RMS {:.3}°: {report}",
         t.knee_rms_deg()
     );
+    // The pitch estimator against the simulator's ground truth while walking (issue: < 0.5°),
+    // and its gyro-bias estimate near the simulated 0.002 rad/s (plus a 1e-4 rad/s/√s walk).
+    let pitch_rms_deg = t
+        .pitch_rms_rad()
+        .expect("simulation has ground truth")
+        .to_degrees();
+    assert!(
+        pitch_rms_deg < 0.5,
+        "pitch RMS {pitch_rms_deg:.3}°: {report}"
+    );
+    let bias = report.summary.last_sample.gyro_bias_rad_s;
+    assert!(
+        (bias - 0.002).abs() < 0.0015,
+        "bias estimate {bias}: {report}"
+    );
 }
 
 #[test]

@@ -188,7 +188,7 @@ fn default_touchdown_max_descent_mps() -> f64 {
 }
 
 fn default_touchdown_pitch_sigma_rad() -> f64 {
-    0.005
+    0.01
 }
 
 /// Safety limits (see [`crate::safety`]).

@@ -97,6 +97,9 @@ impl Imu for RobotSim {
             accel_z_mps2: s.accel_z_mps2,
         })
     }
+    fn true_pitch_rad(&self) -> Option<f64> {
+        Some(self.torso_pitch_rad())
+    }
 }
 
 /// The simulated robot behind a `SimBus`, in the gait's planned post-impact state, its leg
@@ -289,6 +292,15 @@ impl std::fmt::Display for SimWalkReport {
         let fall = self
             .fall
             .map_or_else(|| "none".to_string(), |(t, w)| format!("{w:?} at {t:.3} s"));
+        if let Some(rms) = t.pitch_rms_rad() {
+            writeln!(
+                f,
+                "pitch estimate vs ground truth: RMS {:.3}°, max {:.3}° (bias estimate {:+.4} rad/s)",
+                rms.to_degrees(),
+                t.pitch_max_abs_rad.to_degrees(),
+                s.last_sample.gyro_bias_rad_s
+            )?;
+        }
         writeln!(
             f,
             "safety trips: {trip} | falls: {fall} | repeated touchdowns {} | friction warnings {}",
