@@ -843,9 +843,14 @@ impl Controller {
                     || eval.foot_height_m <= -self.touchdown_below_m;
                 if eval.touchdown && landed {
                     if self.touchdown_ticks == 0 {
-                        // Both feet are on the ground at the first sign of the touchdown (the
-                        // old stance foot lifts off right after): measure the pitch now.
-                        self.touchdown_pitch = self.touchdown_pitch_rad(&leg_q);
+                        // Both feet are on the ground only at the impact itself (the old stance
+                        // foot lifts off right after): measure the pitch then, and only when
+                        // the accelerometer dates the impact to this sample.
+                        self.touchdown_pitch = if impact {
+                            self.touchdown_pitch_rad(&leg_q)
+                        } else {
+                            f64::NAN
+                        };
                         self.touchdown_pitch_estimate = self.estimator.pitch_rad();
                     }
                     self.touchdown_ticks += 1;

@@ -117,13 +117,19 @@ impl PitchEstimator {
     /// A direct pitch measurement (e.g. the kinematic pitch at a touchdown, when both feet are
     /// on flat ground) with standard deviation `sigma_rad`: a Kalman update with H = [1, 0],
     /// which also corrects the bias through the cross covariance. Ignored before the first
-    /// sample or for a non-finite value.
+    /// sample, for a non-finite value, and as an outlier beyond 4σ of the innovation.
     pub fn measure_pitch(&mut self, pitch_rad: f64, sigma_rad: f64) {
         if !self.initialized || !pitch_rad.is_finite() || !sigma_rad.is_finite() || sigma_rad <= 0.0
         {
             return;
         }
-        self.correct(wrap_pi(pitch_rad - self.pitch_rad), sigma_rad * sigma_rad);
+        let innovation = wrap_pi(pitch_rad - self.pitch_rad);
+        let r = sigma_rad * sigma_rad;
+        // Outlier gate: a measurement more than 4σ of the innovation away is rejected.
+        if innovation * innovation > 16.0 * (self.p[0][0] + r) {
+            return;
+        }
+        self.correct(innovation, r);
     }
 
     fn correct(&mut self, innovation: f64, r: f64) {
@@ -292,5 +298,45 @@ mod tests {
             (wrap_pi(-1.5 * core::f64::consts::PI) - 0.5 * core::f64::consts::PI).abs() < 1e-12
         );
         assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-15);
+    }
+
+    /// Walking mode: gyro only between steps, a kinematic pitch at each "touchdown" (every
+    /// 0.5 s, σ 0.01 rad): the bias becomes observable and converges; an outlier is rejected.
+    #[test]
+    fn touchdown_pitch_measurements_make_the_bias_observable_and_reject_outliers() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut est = PitchEstimator::new(params());
+        est.initialize(0.0, 0.0, 0.002);
+        let (dt, bias) = (1e-3, 0.02);
+        let w = core::f64::consts::TAU * 0.5;
+        let mut sq = 0.0;
+        let n = 20_000;
+        for k in 0..n {
+            let t = k as f64 * dt;
+            let theta = 0.1 * (w * t).sin();
+            let rate = 0.1 * w * (w * t).cos();
+            let gyro = rate + bias + 0.01 * gauss(&mut rng);
+            // The accelerometer is ignored while walking, whatever it reads.
+            assert!(!est.update_with(gyro, 5.0, 3.0, dt, false));
+            if k % 500 == 499 {
+                est.measure_pitch(theta + 0.01 * gauss(&mut rng), 0.01);
+            }
+            if k > n / 2 {
+                sq += (est.pitch_rad() - theta).powi(2);
+            }
+        }
+        let rms = (sq / (n / 2) as f64).sqrt();
+        assert!(rms < 0.01, "pitch rms {rms}");
+        assert!(
+            (est.gyro_bias_rad_s() - bias).abs() < 0.005,
+            "bias {}",
+            est.gyro_bias_rad_s()
+        );
+        // A measurement 0.5 rad off (a touchdown on an obstacle, a mis-detection) is dropped.
+        let before = est.pitch_rad();
+        est.measure_pitch(before + 0.5, 0.01);
+        assert_eq!(est.pitch_rad(), before);
+        est.measure_pitch(f64::NAN, 0.01);
+        assert_eq!(est.pitch_rad(), before);
     }
 }
