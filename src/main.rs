@@ -43,6 +43,9 @@ enum Command {
         /// MCAP log file (sim; default: no log).
         #[arg(long)]
         log: Option<PathBuf>,
+        /// Seed of the simulated IMU and encoder noise (sim).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
         /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
@@ -371,6 +374,7 @@ fn run(cli: Cli) -> Result<()> {
             duration,
             belt,
             log,
+            seed,
             can_interfaces,
         } => {
             let setup = runtime::Setup::load(&config, &gait)?;
@@ -379,6 +383,7 @@ fn run(cli: Cli) -> Result<()> {
                     let mut options = runtime::sim_run::SimWalkOptions::new(duration);
                     options.belt_speed_mps = belt;
                     options.log_path = log;
+                    options.seed = seed;
                     sim_walk(&setup, &options)
                 }
                 Backend::Can => {

@@ -5,9 +5,14 @@ use runtime::sim_run::{walk, SimWalkOptions, SimWalkReport};
 use runtime::Setup;
 
 fn walk_for(duration_s: f64, belt_speed_mps: Option<f64>) -> (Setup, SimWalkReport) {
+    walk_seeded(duration_s, belt_speed_mps, 1)
+}
+
+fn walk_seeded(duration_s: f64, belt_speed_mps: Option<f64>, seed: u64) -> (Setup, SimWalkReport) {
     let setup = Setup::shipped().expect("shipped config and gait load");
     let mut options = SimWalkOptions::new(duration_s);
     options.belt_speed_mps = belt_speed_mps;
+    options.seed = seed;
     let report = walk(&setup, &options).expect("the simulated run starts");
     println!("{report}\n");
     (setup, report)
@@ -67,7 +72,7 @@ fn walks_the_gait_30_s_without_a_fall_at_the_planned_step_length() {
 }
 
 #[test]
-#[ignore = "walks 30 s (66 steps of 0.1518 m, hip RMS 0.45 deg, knee 0.36 deg) but each step is faster than planned: 0.45 s instead of 0.90 s (0.34 m/s instead of 0.167 m/s); under joint PD + feed-forward on the exact model the step time converges to ~0.96 s instead (planner test shipped_gait_needs_its_feedforward_under_joint_pd), so the runtime/simulator loop adds energy every step that the model does not"]
+#[ignore = "walks 30 s (40 steps of 0.1505 m, hip RMS 0.15 deg, knee 0.21 deg, 0.74 s per step with seed 1, 0.72-0.78 s over seeds 1-8) but faster than the planned 0.90 s: a command acts 2-3 ms after its sample on the simulated bus, and on the exact model references 1 ms late already shorten the steady step from 0.96 s to 0.73 s (planner test late_references_speed_the_gait_up); the 1 ms reference lead of the shipped config recovers part of it, more lead loses some seeds"]
 fn walks_at_the_planned_step_duration() {
     let (setup, report) = walk_for(30.0, None);
     assert_kept_walking(&report, 30.0);
@@ -88,5 +93,18 @@ fn keeps_walking_with_the_belt_at_0_2_and_0_3_m_per_s() {
         let (_, report) = walk_for(30.0, Some(belt));
         println!("belt {belt} m/s: drift {:+.3} m over 30 s", report.drift_m);
         assert_kept_walking(&report, 30.0);
+    }
+}
+
+/// The walk does not hang on one noise realization: other IMU and encoder noise seeds walk the
+/// 30 s too, at the planned step length.
+#[test]
+fn walks_with_other_sensor_noise_seeds() {
+    for seed in 2..=5 {
+        let (setup, report) = walk_seeded(30.0, None, seed);
+        assert_kept_walking(&report, 30.0);
+        let g = &setup.gait;
+        let length_error = (report.mean_step_length_m - g.step_length_m).abs() / g.step_length_m;
+        assert!(length_error <= 0.10, "seed {seed}: {report}");
     }
 }

@@ -137,6 +137,10 @@ pub enum Law {
         /// Feed-forward torque per output (columns) at increasing phases τ, interpolated
         /// linearly and held outside; empty: none.
         feedforward: Vec<(f64, Vec<f64>)>,
+        /// Age of the references when they act, s: y^d, ẏ^d and the feed-forward are taken at
+        /// τ − τ̇·delay (first order), as on a bus that applies a command some milliseconds
+        /// after the sample it was computed from. 0: none.
+        reference_delay_s: f64,
     },
 }
 
@@ -296,10 +300,20 @@ impl ClosedLoop {
             kp_nm_per_rad,
             kd_nm_s_per_rad,
             feedforward,
+            reference_delay_s,
         } = &self.law
         {
-            let (y, dy, _) = self.outputs(qr, dqr, &vec![0.0; nq])?;
-            let (tau, _) = self.phase(qr, dqr)?;
+            let (mut y, mut dy, _) = self.outputs(qr, dqr, &vec![0.0; nq])?;
+            let (mut tau, tau_rate) = self.phase(qr, dqr)?;
+            if *reference_delay_s > 0.0 {
+                tau -= tau_rate * reference_delay_s;
+                for (o, (yo, dyo)) in y.iter_mut().zip(dy.iter_mut()).enumerate() {
+                    let (b0, b1, _) = bezier::eval_all(&self.alpha[o], tau);
+                    let j = self.biped.output_coords[o];
+                    *yo = qr[j] - b0;
+                    *dyo = dqr[j] - b1 * tau_rate;
+                }
+            }
             let mut ff = vec![0.0; y.len()];
             let knots: Vec<f64> = feedforward.iter().map(|(t, _)| *t).collect();
             let rows: Vec<&[f64]> = feedforward.iter().map(|(_, u)| u.as_slice()).collect();

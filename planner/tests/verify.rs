@@ -113,6 +113,7 @@ fn shipped_gait_needs_its_feedforward_under_joint_pd() {
         kp_nm_per_rad: 300.0,
         kd_nm_s_per_rad: 6.0,
         feedforward,
+        reference_delay_s: 0.0,
     };
     let options = VerifyOptions::default();
     let report = verify_gait_with(&model, &gait, options, pd(table)).expect("PD closed loop");
@@ -123,4 +124,49 @@ fn shipped_gait_needs_its_feedforward_under_joint_pd() {
         Ok(r) => assert!(!r.passed(options.fixed_point_tolerance), "{r}"),
         Err(e) => println!("PD only: {e}"),
     }
+}
+
+/// Why the runtime needs latency compensation: on the exact model under the runtime's PD
+/// (150/3 N·m/rad, N·m·s/rad) with the planned feed-forward, references acting 1 ms late make
+/// the robot walk a different, much faster orbit (shorter steps in time, same length).
+#[test]
+fn late_references_speed_the_gait_up() {
+    let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
+    let ff = gait.feedforward.as_ref().expect("feed-forward table");
+    let table: Vec<(f64, Vec<f64>)> = ff
+        .phase
+        .iter()
+        .copied()
+        .zip(ff.torque_nm.iter().cloned())
+        .collect();
+    let state = gait.initial_state.as_ref().expect("initial state");
+    let steady_duration = |delay: f64| -> f64 {
+        let law = Law::JointPd {
+            kp_nm_per_rad: 150.0,
+            kd_nm_s_per_rad: 3.0,
+            feedforward: table.clone(),
+            reference_delay_s: delay,
+        };
+        let cl = ClosedLoop::new(&model, &gait, VerifyOptions::default())
+            .expect("closed loop")
+            .with_law(law);
+        let bp = &cl.biped;
+        let mut x: Vec<f64> = bp
+            .reduced
+            .iter()
+            .map(|&c| state.q[c])
+            .chain(bp.reduced.iter().map(|&c| state.dq[c]))
+            .collect();
+        let mut last = f64::NAN;
+        for _ in 0..10 {
+            let step = cl.step(&x).expect("the robot keeps stepping");
+            last = step.duration_s;
+            x = step.next.as_slice().to_vec();
+        }
+        last
+    };
+    let (on_time, late) = (steady_duration(0.0), steady_duration(0.001));
+    println!("10th step: {on_time:.3} s with on-time references, {late:.3} s with 1 ms late ones");
+    assert!((on_time - gait.step_duration_s).abs() < 0.1, "{on_time}");
+    assert!(late < 0.8 * on_time, "{late} vs {on_time}");
 }

@@ -135,6 +135,16 @@ pub struct WalkConfig {
     /// the swing foot (near the ground, late in the step): switch at once, m/s².
     #[serde(default = "default_touchdown_impact_accel_mps2")]
     pub touchdown_impact_accel_mps2: f64,
+    /// τ from which an impact spike (with the swing foot near the ground) switches the stance
+    /// leg: a foot that lands a little early must not be ignored.
+    #[serde(default = "default_impact_min_phase")]
+    pub impact_min_phase: f64,
+    /// Latency compensation, s: y^d, ẏ^d and the feed-forward are evaluated at τ + τ̇·lead
+    /// (for τ̇ > 0), since a command acts some milliseconds after the sample it was computed
+    /// from. The gait is very sensitive to this delay: on the exact model, references 1 ms late
+    /// shorten the steady step from 0.96 s to 0.73 s (README).
+    #[serde(default)]
+    pub reference_lead_s: f64,
     /// Consecutive ticks the touchdown condition must hold.
     pub touchdown_debounce_ticks: u32,
     /// Largest |τ̇| used for ẏ^d, 1/s (guards the velocity reference against gyro spikes).
@@ -173,6 +183,10 @@ pub struct EstimatorConfig {
 
 fn default_max_implausible_imu_samples() -> u32 {
     5
+}
+
+fn default_impact_min_phase() -> f64 {
+    0.8
 }
 
 fn default_touchdown_impact_accel_mps2() -> f64 {
@@ -487,6 +501,15 @@ impl RuntimeConfig {
         positive("walk.switch_min_phase", w.switch_min_phase)?;
         non_negative("walk.touchdown_height_m", w.touchdown_height_m)?;
         non_negative("walk.touchdown_below_m", w.touchdown_below_m)?;
+        non_negative("walk.impact_min_phase", w.impact_min_phase)?;
+        non_negative("walk.reference_lead_s", w.reference_lead_s)?;
+        if w.reference_lead_s > 0.02 {
+            return Err(bad(
+                "walk.reference_lead_s",
+                w.reference_lead_s.to_string(),
+                "must be at most 0.02 s (a few control periods)",
+            ));
+        }
         positive(
             "walk.touchdown_impact_accel_mps2",
             w.touchdown_impact_accel_mps2,

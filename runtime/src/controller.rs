@@ -478,6 +478,8 @@ pub struct Controller {
     touchdown_max_descent_mps: f64,
     touchdown_below_m: f64,
     touchdown_impact_accel_mps2: f64,
+    impact_min_phase: f64,
+    reference_lead_s: f64,
     touchdown_debounce_ticks: u32,
     max_phase_rate_per_s: f64,
     phase_observer_hz: f64,
@@ -491,9 +493,6 @@ pub struct Controller {
     steps: u32,
     step_start_t_s: f64,
     touchdown_ticks: u32,
-    /// Kinematic pitch at the first tick of the current touchdown, and the estimate then, rad.
-    touchdown_pitch: f64,
-    touchdown_pitch_estimate: f64,
     /// (time, swing-foot height) at the previous walking tick.
     last_foot: Option<(f64, f64)>,
     /// Phase observer state: (τ̂, τ̂̇, time of the last update) once walking.
@@ -573,6 +572,8 @@ impl Controller {
             touchdown_max_descent_mps: config.walk.touchdown_max_descent_mps,
             touchdown_below_m: config.walk.touchdown_below_m,
             touchdown_impact_accel_mps2: config.walk.touchdown_impact_accel_mps2,
+            impact_min_phase: config.walk.impact_min_phase,
+            reference_lead_s: config.walk.reference_lead_s,
             touchdown_debounce_ticks: config.walk.touchdown_debounce_ticks,
             max_phase_rate_per_s: config.walk.max_phase_rate_per_s,
             phase_observer_hz: config.walk.phase_observer_hz,
@@ -589,8 +590,6 @@ impl Controller {
             steps: 0,
             step_start_t_s: 0.0,
             touchdown_ticks: 0,
-            touchdown_pitch: f64::NAN,
-            touchdown_pitch_estimate: f64::NAN,
             last_foot: None,
             phase_hat: None,
             ramp: zero_ramp,
@@ -836,36 +835,26 @@ impl Controller {
                         .abs()
                         >= self.touchdown_impact_accel_mps2
                 });
-                // After a real impact the old stance foot lifts off and the relative height
-                // keeps falling below zero: that is a touchdown too.
-                let landed = impact
-                    || descent_mps <= self.touchdown_max_descent_mps
+                // The impact spike late in the step, with the swing foot near the ground, is the
+                // touchdown, even a little before τ = 1 (the feet are both down only then: the
+                // pitch that levels them is measured at this very sample).
+                let near = eval.foot_height_m <= self.touchdown_height_m;
+                let impact_switch = impact && near && eval.phase >= self.impact_min_phase;
+                // Without a spike: τ ≥ τ_switch and the foot stopped descending, or lies below
+                // the stance foot (the old stance foot lifting off after the impact), debounced.
+                let landed = descent_mps <= self.touchdown_max_descent_mps
                     || eval.foot_height_m <= -self.touchdown_below_m;
                 if eval.touchdown && landed {
-                    if self.touchdown_ticks == 0 {
-                        // Both feet are on the ground only at the impact itself (the old stance
-                        // foot lifts off right after): measure the pitch then, and only when
-                        // the accelerometer dates the impact to this sample.
-                        self.touchdown_pitch = if impact {
-                            self.touchdown_pitch_rad(&leg_q)
-                        } else {
-                            f64::NAN
-                        };
-                        self.touchdown_pitch_estimate = self.estimator.pitch_rad();
-                    }
                     self.touchdown_ticks += 1;
                 } else {
                     self.touchdown_ticks = 0;
                 }
-                if self.touchdown_ticks >= self.touchdown_debounce_ticks
-                    || (impact && eval.touchdown)
-                {
-                    // Both feet were down: the pitch that levelled them is a measurement,
-                    // carried forward by the gyro since.
-                    let pitch = self.touchdown_pitch
-                        + (self.estimator.pitch_rad() - self.touchdown_pitch_estimate);
-                    self.estimator
-                        .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+                if impact_switch || self.touchdown_ticks >= self.touchdown_debounce_ticks {
+                    if impact_switch {
+                        let pitch = self.touchdown_pitch_rad(&leg_q);
+                        self.estimator
+                            .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+                    }
                     // Impact: relabel the legs and start the next step.
                     self.stance = self.stance.other();
                     self.step_start_t_s = t;
@@ -1027,8 +1016,15 @@ impl Controller {
     /// Desired outputs, their rates and the feed-forward at phase `phase` and rate `rate`.
     fn references(&self, phase: f64, rate: f64, foot_height_m: f64) -> WalkEval {
         let rate = rate.clamp(-self.max_phase_rate_per_s, self.max_phase_rate_per_s);
+        // Latency compensation: the command acts a few milliseconds after the sample it was
+        // computed from, so the references are taken that much further along the step.
         let s = if phase.is_finite() {
-            phase.clamp(0.0, 1.0)
+            let ahead = if rate > 0.0 {
+                phase + self.reference_lead_s * rate
+            } else {
+                phase
+            };
+            ahead.clamp(0.0, 1.0)
         } else {
             0.0
         };
@@ -1322,10 +1318,12 @@ mod tests {
             (tau - 0.3 / setup.gait.step_duration_s).abs() < 3e-3,
             "{tau}"
         );
+        // The references are taken τ̇·lead ahead (latency compensation).
+        let ahead = tau + setup.config.walk.reference_lead_s / setup.gait.step_duration_s;
         for i in 0..OUTPUTS {
             let a = &setup.gait.bezier.alpha[i];
-            assert!((s.y_des_rad[i] - bezier::eval(a, tau)).abs() < 1e-12);
-            let dy = bezier::eval_d1(a, tau) / setup.gait.step_duration_s;
+            assert!((s.y_des_rad[i] - bezier::eval(a, ahead)).abs() < 1e-12);
+            let dy = bezier::eval_d1(a, ahead) / setup.gait.step_duration_s;
             assert!((s.dy_des_rad_s[i] - dy).abs() < 1e-9);
         }
         // The gait's stance leg is right: stance hip is slot 2.
