@@ -46,6 +46,10 @@ enum Command {
         /// Seed of the simulated IMU and encoder noise (sim).
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Pace the simulated run by the wall clock at the loop rate and report the loop's
+        /// wake-up jitter (sim; default: as fast as the CPU allows).
+        #[arg(long)]
+        real_time: bool,
         /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
@@ -375,6 +379,7 @@ fn run(cli: Cli) -> Result<()> {
             belt,
             log,
             seed,
+            real_time,
             can_interfaces,
         } => {
             let setup = runtime::Setup::load(&config, &gait)?;
@@ -384,6 +389,7 @@ fn run(cli: Cli) -> Result<()> {
                     options.belt_speed_mps = belt;
                     options.log_path = log;
                     options.seed = seed;
+                    options.real_time = real_time;
                     sim_walk(&setup, &options)
                 }
                 Backend::Can => {

@@ -104,3 +104,21 @@ fn sim_run_reports_steps_and_tracking() {
     assert!(out.contains("falls: none"), "{out}");
     assert!(out.contains("tick compute time: median"), "{out}");
 }
+
+#[test]
+fn real_time_sim_run_reports_the_loop_jitter() {
+    // Wall-clock figures are machine-dependent: only their presence is checked.
+    let (ok, out, err) = adam(&[
+        "run",
+        "--backend",
+        "sim",
+        "--duration",
+        "0.5s",
+        "--real-time",
+    ]);
+    assert!(ok, "{out}\n{err}");
+    assert!(
+        out.contains("loop wake-up latency (jitter): median"),
+        "{out}"
+    );
+}

@@ -209,6 +209,9 @@ pub struct RunSummary {
     pub last_sample: StateSample,
     /// Controller tick compute time.
     pub tick_times: TickTimes,
+    /// How late each tick started against its absolute deadline (loop jitter; zero under a
+    /// simulated clock).
+    pub wake_latency: TickTimes,
     /// Output tracking while walking.
     pub tracking: TrackingStats,
     /// Log statistics, if logging.
@@ -412,6 +415,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     let mut out = TickOutput::default();
     let mut sample = StateSample::default();
     let mut histogram = Histogram::new();
+    let mut wake_histogram = Histogram::new();
     let mut transitions = Vec::with_capacity(64);
     let mut script = options.script.iter().peekable();
     let ticks = (options.duration_s * rate_hz).round().max(0.0) as u64;
@@ -434,6 +438,9 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
 
     for tick in 0..ticks {
         let t = clock.now_s() - t0;
+        // Wake-up jitter: how late this tick starts against its absolute deadline.
+        let late_s = (t0 + t) - deadline;
+        wake_histogram.add((late_s.max(0.0) * 1e9) as u64);
         // Exchange: a NaN position marks "no reply written".
         for r in replies.iter_mut() {
             r.q_rad = f64::NAN;
@@ -552,6 +559,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         transitions,
         last_sample: sample,
         tick_times: histogram.times(),
+        wake_latency: wake_histogram.times(),
         tracking,
         log,
         publish_failures,

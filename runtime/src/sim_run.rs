@@ -14,7 +14,7 @@
 //! double-support pose at rest, from which the state-based phase cannot start a step.
 
 use crate::io::Imu;
-use crate::rt_loop::{LoopOptions, RunSummary, SimulatedClock};
+use crate::rt_loop::{LoopOptions, MonotonicClock, RunSummary, SimulatedClock};
 use crate::{Result, RuntimeError, Setup};
 use drivers::imu::ImuNoise;
 use drivers::sim::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
@@ -37,6 +37,9 @@ pub struct SimWalkOptions {
     pub seed: u64,
     /// Write an MCAP log here.
     pub log_path: Option<PathBuf>,
+    /// Pace the loop by the wall clock at the config's rate (measures loop jitter) instead of
+    /// running as fast as the CPU allows under a simulated clock.
+    pub real_time: bool,
 }
 
 impl SimWalkOptions {
@@ -49,6 +52,7 @@ impl SimWalkOptions {
             imu_noise: ImuNoise::default(),
             seed: 1,
             log_path: None,
+            real_time: false,
         }
     }
 }
@@ -196,13 +200,19 @@ pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
     let mut loop_options = LoopOptions::simulation(options.duration_s);
     loop_options.start_walking = true;
     loop_options.log_path = options.log_path.clone();
-    let (summary, backend) = crate::run(
-        setup,
-        backend,
-        SimulatedClock::default(),
-        loop_options,
-        None,
-    )?;
+    // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
+    loop_options.realtime = options.real_time;
+    let (summary, backend) = if options.real_time {
+        crate::run(setup, backend, MonotonicClock, loop_options, None)?
+    } else {
+        crate::run(
+            setup,
+            backend,
+            SimulatedClock::default(),
+            loop_options,
+            None,
+        )?
+    };
     let sim = backend.plant();
     let mut report = SimWalkReport {
         duration_s: options.duration_s,
@@ -252,6 +262,14 @@ pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
         report.speed_mps = length_sum_m / duration_sum_s;
     }
     Ok(report)
+}
+
+fn granted(r: Option<core::result::Result<(), i32>>) -> String {
+    match r {
+        None => "not asked".into(),
+        Some(Ok(())) => "ok".into(),
+        Some(Err(errno)) => format!("denied (errno {errno})"),
+    }
 }
 
 impl std::fmt::Display for SimWalkReport {
@@ -314,6 +332,20 @@ impl std::fmt::Display for SimWalkReport {
             s.tick_times.max_ns as f64 / 1e3,
             s.missing_replies,
             s.bus_errors
-        )
+        )?;
+        if s.wake_latency.max_ns > 0 {
+            write!(
+                f,
+                "\nloop wake-up latency (jitter): median {:.1} µs, p99 {:.1} µs, max {:.1} µs | overruns {} (longest streak {}) | mlockall {} SCHED_FIFO {}",
+                s.wake_latency.median_ns as f64 / 1e3,
+                s.wake_latency.p99_ns as f64 / 1e3,
+                s.wake_latency.max_ns as f64 / 1e3,
+                s.overruns,
+                s.max_overrun_streak,
+                granted(s.realtime.memory_locked),
+                granted(s.realtime.fifo),
+            )?;
+        }
+        Ok(())
     }
 }
