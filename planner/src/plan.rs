@@ -76,7 +76,7 @@ pub fn solve_cost_stage(
     Ok(solve_stage(&costed, "cost of transport", config, &mut |_| {})?.0)
 }
 
-fn solve_stage(
+pub(crate) fn solve_stage(
     problem: &HzdProblem,
     stage: &'static str,
     config: &PlannerConfig,

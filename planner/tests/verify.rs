@@ -170,3 +170,24 @@ fn late_references_speed_the_gait_up() {
     assert!((on_time - gait.step_duration_s).abs() < 0.1, "{on_time}");
     assert!(late < 0.8 * on_time, "{late} vs {on_time}");
 }
+
+/// The co-designed ADAM shipped in configs/ (`adam codesign`): its gait is a stable orbit on its
+/// URDF, and that URDF is exactly GenerateModel's at the gait's design lengths.
+#[test]
+fn shipped_codesigned_gait_is_stable_on_its_generated_urdf() {
+    let path = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/gaits/adam_codesign.json"
+    ));
+    let (gait, model) = load_gait_and_robot(path).expect("co-designed gait and URDF load");
+    let report = verify_gait(&model, &gait, VerifyOptions::default()).expect("verifies");
+    println!("{report}");
+    assert!(report.passed(1e-6), "{report}");
+    let urdf = std::fs::read_to_string(path.parent().expect("folder").join(&gait.robot.urdf))
+        .expect("URDF");
+    let regenerated = model::design::generate_urdf(&gait.design).expect("generates");
+    assert_eq!(
+        urdf, regenerated,
+        "the URDF is GenerateModel's at the gait's lengths"
+    );
+}
