@@ -49,12 +49,25 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Pace the simulated run by the wall clock at the loop rate and report the loop's
-        /// wake-up jitter (sim; default: as fast as the CPU allows).
+        /// wake-up jitter (sim; default: as fast as the CPU allows). A wall-clock run listens
+        /// for operator commands over iceoryx2 (`adam op`).
         #[arg(long)]
         real_time: bool,
+        /// Read operator commands from the keyboard, one per line (s start, w walk, p stop,
+        /// d damp, r reset, e e-stop); with --real-time.
+        #[arg(long, requires = "real_time")]
+        keyboard: bool,
         /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
+    },
+    /// Send an operator command to a running `adam run` over iceoryx2.
+    Op {
+        /// start, walk, stop, damp, reset or estop.
+        command: String,
+        /// Runtime config (its telemetry service name locates the runtime).
+        #[arg(long, default_value = "configs/runtime/adam.toml")]
+        config: PathBuf,
     },
     /// Print a robot model: bodies, joints, total mass, leg lengths and D(q) at the nominal pose.
     Model {
@@ -183,6 +196,36 @@ fn timestamped_log_path() -> PathBuf {
 }
 
 /// Walk in simulation and print the report.
+/// A wall-clock simulated run that takes operator commands over iceoryx2 and, if asked, from
+/// the keyboard.
+fn sim_walk_operated(
+    setup: &runtime::Setup,
+    options: &runtime::sim_run::SimWalkOptions,
+    keyboard: bool,
+) -> Result<()> {
+    use runtime::operator::{self, SharedHandle};
+    let (handle, receiver) = operator::channel(64);
+    let shared = SharedHandle::new(handle);
+    let service = operator::operator_service_name(&setup.config.telemetry.service_name);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let forwarder = operator::spawn_iceoryx2_forwarder(&service, shared.clone(), stop.clone())?;
+    println!("operator commands: `adam op <command>` (iceoryx2 service {service})");
+    if keyboard {
+        println!("{}", operator::KEY_HELP);
+        // The thread ends with stdin; it is not joined (a blocked read must not hold the exit).
+        operator::spawn_keyboard(std::io::BufReader::new(std::io::stdin()), shared);
+    }
+    let report = runtime::sim_run::walk_with_operator(setup, options, Some(receiver));
+    stop.store(true, std::sync::atomic::Ordering::Release);
+    let _ = forwarder.join();
+    let report = report?;
+    println!("{report}");
+    if let Some((t, what)) = report.fall {
+        bail!("the robot fell ({what:?}) at {t:.3} s");
+    }
+    Ok(())
+}
+
 fn sim_walk(setup: &runtime::Setup, options: &runtime::sim_run::SimWalkOptions) -> Result<()> {
     if let Some(dir) = options.log_path.as_ref().and_then(|p| p.parent()) {
         if !dir.as_os_str().is_empty() {
@@ -691,6 +734,7 @@ fn run(cli: Cli) -> Result<()> {
             log,
             seed,
             real_time,
+            keyboard,
             can_interfaces,
         } => {
             let setup = runtime::Setup::load(&config, &gait)?;
@@ -701,7 +745,11 @@ fn run(cli: Cli) -> Result<()> {
                     options.log_path = log;
                     options.seed = seed;
                     options.real_time = real_time;
-                    sim_walk(&setup, &options)
+                    if real_time {
+                        sim_walk_operated(&setup, &options, keyboard)
+                    } else {
+                        sim_walk(&setup, &options)
+                    }
                 }
                 Backend::Can => {
                     let interfaces = can_interfaces
@@ -717,6 +765,21 @@ fn run(cli: Cli) -> Result<()> {
             command: GaitCommand::Check { gait, epsilon },
         } => gait_check(&gait, epsilon),
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
+        Command::Op { command, config } => {
+            let cmd = runtime::operator::parse_key(&command).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "unknown operator command {command:?}: start, walk, stop, damp, reset or estop"
+                )
+            })?;
+            let cfg = runtime::config::RuntimeConfig::load(&config)?;
+            let service = runtime::operator::operator_service_name(&cfg.telemetry.service_name);
+            let receivers = runtime::operator::send_over_iceoryx2(&service, cmd)?;
+            println!("sent {cmd:?} on {service} to {receivers} runtime(s)");
+            if receivers == 0 {
+                bail!("no runtime is listening on {service}");
+            }
+            Ok(())
+        }
         Command::Codesign {
             config,
             inertia,

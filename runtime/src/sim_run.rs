@@ -194,6 +194,15 @@ fn sim_error(e: &drivers::sim::RobotSimError) -> RuntimeError {
 /// Walk the gait on the simulated treadmill for `options.duration_s` (simulated time, as fast
 /// as the CPU allows) and measure the walk from the simulator's ground truth.
 pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
+    walk_with_operator(setup, options, None)
+}
+
+/// [`walk`] with operator commands (keyboard, iceoryx2) arriving through `operator`.
+pub fn walk_with_operator(
+    setup: &Setup,
+    options: &SimWalkOptions,
+    operator: Option<crate::operator::OperatorReceiver>,
+) -> Result<SimWalkReport> {
     let backend = sim_backend(setup, options)?;
     let belt_speed_mps = backend.plant().config().belt_speed_mps;
     let x0_m = backend.plant().base_position_m()[0];
@@ -203,14 +212,14 @@ pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
     // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
     loop_options.realtime = options.real_time;
     let (summary, backend) = if options.real_time {
-        crate::run(setup, backend, MonotonicClock, loop_options, None)?
+        crate::run(setup, backend, MonotonicClock, loop_options, operator)?
     } else {
         crate::run(
             setup,
             backend,
             SimulatedClock::default(),
             loop_options,
-            None,
+            operator,
         )?
     };
     let sim = backend.plant();
