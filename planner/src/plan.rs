@@ -65,6 +65,9 @@ pub enum Progress<'a> {
 
 const FEASIBILITY: &str = "feasibility";
 
+/// Iterations allowed to one start of the feasibility solve before the next start is tried.
+pub const FEASIBILITY_MAX_ITERATIONS: usize = 150;
+
 /// The cost-of-transport solve alone, from a feasible point (for warm re-plans and tests).
 pub fn solve_cost_stage(
     model: &PlanarModel,
@@ -136,16 +139,55 @@ pub fn plan_gait(
         config.gait.step_length_m[0],
         0.25_f64.max(config.gait.step_length_m[0]),
     );
-    let duration0 = 0.5 * (config.gait.step_duration_s[0] + config.gait.step_duration_s[1]);
+    let [s_lo, s_hi] = config.gait.step_length_m;
+    let [d_lo, d_hi] = config.gait.step_duration_s;
     let probe = HzdProblem::new(biped.clone(), config.clone(), Vec::new(), false)?;
-    let guess = initial_guess(&biped, &probe.layout, step0, duration0)?;
-    let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
     let setup_time_s = setup.elapsed().as_secs_f64();
     let size = (
-        nlp::NlpProblem::num_variables(&feasibility),
-        nlp::NlpProblem::num_constraints(&feasibility),
+        nlp::NlpProblem::num_variables(&probe),
+        nlp::NlpProblem::num_constraints(&probe),
     );
-    let (x1, r1) = solve_stage(&feasibility, FEASIBILITY, config, on_progress)?;
+    // The feasibility solve is sensitive to its start: from some hand-built steps the interior
+    // point drifts into a long restoration phase (the default ADAM problem from 0.25 m / 0.75 s
+    // took 67 iterations and 106 s; from 0.25 m / 0.65 s, 43 iterations and 2.3 s). So a fixed,
+    // deterministic list of starts is tried in order, each capped at FEASIBILITY_MAX_ITERATIONS.
+    let starts = [
+        (step0, d_lo + (d_hi - d_lo) / 6.0),
+        ((step0 + 0.05).min(s_hi), d_lo + (d_hi - d_lo) / 3.0),
+        (s_lo, d_hi),
+        ((step0 - 0.05).max(s_lo), d_lo + 2.0 * (d_hi - d_lo) / 3.0),
+        (step0, 0.5 * (d_lo + d_hi)),
+    ];
+    let mut capped = config.clone();
+    capped.solver.max_iterations = config.solver.max_iterations.min(FEASIBILITY_MAX_ITERATIONS);
+    let mut spent = (0, 0.0, 0.0);
+    let mut found = None;
+    let mut last_error = None;
+    for &(step, duration) in &starts {
+        let guess = initial_guess(&biped, &probe.layout, step, duration)?;
+        let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
+        let attempt = Instant::now();
+        match solve_stage(&feasibility, FEASIBILITY, &capped, on_progress) {
+            Ok((x, mut report)) => {
+                report.iterations += spent.0;
+                report.solve_time_s += spent.1;
+                report.evaluation_time_s += spent.2;
+                found = Some((x, report));
+                break;
+            }
+            Err(e) => {
+                // Count the attempt honestly in the stage's figures.
+                if let PlannerError::NotSolved { iterations, .. } = &e {
+                    spent.0 += iterations;
+                }
+                spent.1 += attempt.elapsed().as_secs_f64();
+                last_error = Some(e);
+            }
+        }
+    }
+    let Some((x1, r1)) = found else {
+        return Err(last_error.unwrap_or_else(|| PlannerError::Solver("no start".into())));
+    };
     let costed = HzdProblem::new(biped, config.clone(), x1.clone(), true)?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
     let mut gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
