@@ -61,6 +61,16 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
     },
+    /// Run logs (MCAP): `adam logs info <run.mcap>`.
+    Logs {
+        #[command(subcommand)]
+        what: LogsWhat,
+    },
+    /// Figures from run logs: `adam plot portrait <run.mcap> [--compare <other.mcap>]`.
+    Plot {
+        #[command(subcommand)]
+        what: PlotWhat,
+    },
     /// Benchmarks that print a table (medians over repeated runs).
     Bench {
         #[command(subcommand)]
@@ -303,6 +313,30 @@ fn show_model(urdf: &PathBuf, design: Option<&str>) -> Result<()> {
     }
     print!("{}", robot.summary(&q)?);
     Ok(())
+}
+
+#[derive(Subcommand)]
+enum LogsWhat {
+    /// Channels, message counts, time span, drops, safety events, gait and design used.
+    Info {
+        /// The log.
+        log: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum PlotWhat {
+    /// Phase portraits (q vs q̇) of the hips and knees, like the paper's Fig. 4, as PNG and SVG.
+    Portrait {
+        /// The run.
+        log: PathBuf,
+        /// A second run to overlay (e.g. another gait, seed or the hardware).
+        #[arg(long)]
+        compare: Option<PathBuf>,
+        /// Output prefix (default: the log's path without extension, + `-portrait`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -851,6 +885,45 @@ fn run(cli: Cli) -> Result<()> {
                     config,
                 },
         } => bench_plan(runs, &robot, &config),
+        Command::Logs {
+            what: LogsWhat::Info { log },
+        } => {
+            println!("{}", runtime::log_read::info(&log)?);
+            Ok(())
+        }
+        Command::Plot {
+            what: PlotWhat::Portrait { log, compare, out },
+        } => {
+            let a = runtime::log_read::joint_series(&log)?;
+            let b = compare
+                .as_ref()
+                .map(|p| runtime::log_read::joint_series(p))
+                .transpose()?;
+            let mut runs = vec![plots::PortraitRun {
+                label: log.display().to_string(),
+                series: &a,
+            }];
+            if let (Some(p), Some(b)) = (&compare, &b) {
+                runs.push(plots::PortraitRun {
+                    label: p.display().to_string(),
+                    series: b,
+                });
+            }
+            let prefix = out.unwrap_or_else(|| {
+                let stem = log
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                log.with_file_name(format!("{stem}-portrait"))
+            });
+            plots::portraits(&prefix, &runs)?;
+            println!(
+                "wrote {} and {}",
+                prefix.with_extension("png").display(),
+                prefix.with_extension("svg").display()
+            );
+            Ok(())
+        }
         Command::Op { command, config } => {
             let cmd = runtime::operator::parse_key(&command).ok_or_else(|| {
                 anyhow::anyhow!(

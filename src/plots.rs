@@ -132,3 +132,110 @@ where
         .map_err(err)?;
     Ok(())
 }
+
+/// One run in a phase portrait: its label and its joint series.
+pub struct PortraitRun<'a> {
+    /// Legend label.
+    pub label: String,
+    /// The series.
+    pub series: &'a runtime::log_read::JointSeries,
+}
+
+/// The paper's Fig. 4: phase portraits (q vs q̇) of the left and right hip and knee, one panel
+/// per joint, every run overlaid, as `<prefix>.png` and `<prefix>.svg`.
+pub fn portraits(prefix: &Path, runs: &[PortraitRun<'_>]) -> Result<()> {
+    register_font()?;
+    let png = prefix.with_extension("png");
+    let svg = prefix.with_extension("svg");
+    {
+        let root = BitMapBackend::new(&png, (1200, 900)).into_drawing_area();
+        draw_portraits(&root, runs)?;
+        root.present()
+            .map_err(|e| anyhow!("{}: {e}", png.display()))?;
+    }
+    {
+        let root = SVGBackend::new(&svg, (1200, 900)).into_drawing_area();
+        draw_portraits(&root, runs)?;
+        root.present()
+            .map_err(|e| anyhow!("{}: {e}", svg.display()))?;
+    }
+    Ok(())
+}
+
+fn draw_portraits<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    runs: &[PortraitRun<'_>],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e:?}");
+    root.fill(&WHITE).map_err(err)?;
+    let colors = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+    ];
+    let titles = [
+        "left hip pitch",
+        "left knee pitch",
+        "right hip pitch",
+        "right knee pitch",
+    ];
+    let panels = root.split_evenly((2, 2));
+    // Panel order: left hip, right hip / left knee, right knee.
+    for (panel, &joint) in panels.iter().zip(&[0usize, 2, 1, 3]) {
+        let (mut qmin, mut qmax, mut vmin, mut vmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for r in runs {
+            for (&q, &v) in r.series.q_rad[joint].iter().zip(&r.series.dq_rad_s[joint]) {
+                qmin = qmin.min(q);
+                qmax = qmax.max(q);
+                vmin = vmin.min(v);
+                vmax = vmax.max(v);
+            }
+        }
+        let (pq, pv) = (
+            0.05 * (qmax - qmin).max(1e-3),
+            0.05 * (vmax - vmin).max(1e-3),
+        );
+        let mut chart = ChartBuilder::on(panel)
+            .caption(titles[joint], ("sans-serif", 20))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(55)
+            .build_cartesian_2d((qmin - pq)..(qmax + pq), (vmin - pv)..(vmax + pv))
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("q (rad)")
+            .y_desc("dq/dt (rad/s)")
+            .label_style(("sans-serif", 13))
+            .axis_desc_style(("sans-serif", 15))
+            .draw()
+            .map_err(err)?;
+        for (i, r) in runs.iter().enumerate() {
+            let color = colors[i % colors.len()];
+            let points = r.series.q_rad[joint]
+                .iter()
+                .copied()
+                .zip(r.series.dq_rad_s[joint].iter().copied());
+            chart
+                .draw_series(LineSeries::new(points, color.stroke_width(1)))
+                .map_err(err)?
+                .label(r.label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .label_font(("sans-serif", 13))
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
+}

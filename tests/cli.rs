@@ -122,3 +122,56 @@ fn real_time_sim_run_reports_the_loop_jitter() {
         "{out}"
     );
 }
+
+#[test]
+fn logs_info_and_phase_portraits_read_a_run_log() {
+    let dir = std::env::temp_dir().join(format!("adam-cli-logs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let log = dir.join("run.mcap");
+    let log_s = log.display().to_string();
+    let (ok, out, err) = adam(&[
+        "run",
+        "--backend",
+        "sim",
+        "--duration",
+        "2s",
+        "--log",
+        &log_s,
+    ]);
+    assert!(ok, "{out}\n{err}");
+    let (ok, out, err) = adam(&["logs", "info", &log_s]);
+    assert!(ok, "{out}\n{err}");
+    assert!(
+        out.contains("/joints") && out.contains("2000 messages"),
+        "{out}"
+    );
+    assert!(
+        out.contains("dropped=0") && out.contains("gait: robot adam_planar"),
+        "{out}"
+    );
+    let prefix = dir.join("portrait");
+    let (ok, out, err) = adam(&[
+        "plot",
+        "portrait",
+        &log_s,
+        "--compare",
+        &log_s,
+        "--out",
+        &prefix.display().to_string(),
+    ]);
+    assert!(ok, "{out}\n{err}");
+    for ext in ["png", "svg"] {
+        let len = std::fs::metadata(prefix.with_extension(ext))
+            .expect("figure")
+            .len();
+        assert!(len > 10_000, "{ext}: {len} bytes");
+    }
+    let svg = std::fs::read_to_string(prefix.with_extension("svg")).expect("svg");
+    assert!(
+        svg.contains("left knee pitch") && svg.contains("q (rad)"),
+        "axes and titles"
+    );
+    let (ok, _, err) = adam(&["logs", "info", "Cargo.toml"]);
+    assert!(!ok && err.contains("Cargo.toml"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
