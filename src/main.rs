@@ -433,6 +433,21 @@ enum InertiaArg {
     Alg1,
 }
 
+/// The planner config with the CLI's inertia coupling, if given.
+fn codesign_config(
+    config: &PathBuf,
+    inertia: Option<InertiaArg>,
+) -> Result<planner::config::PlannerConfig> {
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(i) = inertia {
+        cfg.codesign.inertia = match i {
+            InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
+            InertiaArg::Alg1 => planner::config::InertiaCoupling::Alg1,
+        };
+    }
+    Ok(cfg)
+}
+
 fn progress_printer() -> impl FnMut(planner::plan::Progress<'_>) {
     let mut last_print = std::time::Instant::now();
     move |p| match p {
@@ -455,13 +470,7 @@ fn codesign(
     out_gait: &PathBuf,
     out_urdf: &PathBuf,
 ) -> Result<()> {
-    let mut cfg = planner::config::PlannerConfig::load(config)?;
-    if let Some(i) = inertia {
-        cfg.codesign.inertia = match i {
-            InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
-            InertiaArg::Alg1 => planner::config::InertiaCoupling::Alg1,
-        };
-    }
+    let cfg = codesign_config(config, inertia)?;
     for path in [out_gait, out_urdf] {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -557,13 +566,7 @@ fn codesign_sweep(
     if !(1..=20).contains(&grid) {
         bail!("--grid {grid}: must be in 1..=20");
     }
-    let mut cfg = planner::config::PlannerConfig::load(config)?;
-    if let Some(i) = inertia {
-        cfg.codesign.inertia = match i {
-            InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
-            InertiaArg::Alg1 => planner::config::InertiaCoupling::Alg1,
-        };
-    }
+    let cfg = codesign_config(config, inertia)?;
     std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let start = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
@@ -696,19 +699,8 @@ fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
     let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
     let cfg = planner::config::PlannerConfig::load(config)?;
     let urdf_ref = relative_path(robot, out);
-    let mut last_print = std::time::Instant::now();
-    let planned = planner::plan::plan_gait(&model, &urdf_ref, &text, &cfg, &mut |p| match p {
-        planner::plan::Progress::Stage(s) => println!("solve: {s}"),
-        planner::plan::Progress::Iteration(_, r) => {
-            if r.iteration % 10 == 0 || last_print.elapsed().as_secs_f64() > 1.0 {
-                println!(
-                    "  iter {:>4}  objective {:>12.6e}  infeasibility {:>9.2e}  dual {:>9.2e}",
-                    r.iteration, r.objective, r.primal_infeasibility, r.dual_infeasibility
-                );
-                last_print = std::time::Instant::now();
-            }
-        }
-    })?;
+    let planned =
+        planner::plan::plan_gait(&model, &urdf_ref, &text, &cfg, &mut progress_printer())?;
     if let Some(dir) = out.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }

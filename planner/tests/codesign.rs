@@ -38,6 +38,18 @@ fn problem(exact: bool, with_cost: bool) -> (HzdProblem, Vec<f64>) {
     (p, x)
 }
 
+/// Largest |g_a(x) − g_b(x)| over the constraints of two problems of the same layout.
+fn max_residual_difference(a: &HzdProblem, b: &HzdProblem, x: &[f64]) -> f64 {
+    let mut ga = vec![0.0; a.num_constraints()];
+    let mut gb = vec![0.0; b.num_constraints()];
+    a.constraints(x, &mut ga).expect("evaluates");
+    b.constraints(x, &mut gb).expect("evaluates");
+    ga.iter()
+        .zip(&gb)
+        .map(|(p, q)| (p - q).abs())
+        .fold(0.0, f64::max)
+}
+
 #[test]
 fn codesign_derivatives_match_finite_differences() {
     for exact in [false, true] {
@@ -71,15 +83,7 @@ fn lengths_enter_the_constraints_and_exact_coupling_moves_the_inertias() {
         let n = cols.iter().filter(|&&c| c == l.design_var(i)).count();
         assert!(n > 100, "design variable {i} in {n} Jacobian entries");
     }
-    let mut g_frozen = vec![0.0; frozen.num_constraints()];
-    let mut g_exact = vec![0.0; exact.num_constraints()];
-    frozen.constraints(&x, &mut g_frozen).expect("evaluates");
-    exact.constraints(&x, &mut g_exact).expect("evaluates");
-    let diff = g_frozen
-        .iter()
-        .zip(&g_exact)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let diff = max_residual_difference(&frozen, &exact, &x);
     // At 0.27/0.21 m instead of 0.24/0.25 m the thigh and shin masses differ by tens of grams:
     // the dynamics residuals must see it.
     assert!(
@@ -97,15 +101,7 @@ fn exact_inertias_at_the_model_lengths_equal_the_generated_model() {
     let l = &frozen.layout;
     x[l.design_var(0)] = 0.24;
     x[l.design_var(1)] = 0.25;
-    let mut g_frozen = vec![0.0; frozen.num_constraints()];
-    let mut g_exact = vec![0.0; exact.num_constraints()];
-    frozen.constraints(&x, &mut g_frozen).expect("evaluates");
-    exact.constraints(&x, &mut g_exact).expect("evaluates");
-    let diff = g_frozen
-        .iter()
-        .zip(&g_exact)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let diff = max_residual_difference(&frozen, &exact, &x);
     // The URDF prints masses and inertias to 6 significant digits: residuals (N·m, N) agree to
     // about 1e-5 of their size.
     assert!(

@@ -93,22 +93,26 @@ fn a_gait_with_a_changed_robot_or_broken_outputs_is_rejected() {
     );
 }
 
+/// The gait's feed-forward table as the (τ, torques) rows of [`Law::JointPd`].
+fn feedforward_rows(gait: &model::gait::GaitFile) -> Vec<(f64, Vec<f64>)> {
+    let ff = gait
+        .feedforward
+        .as_ref()
+        .expect("the shipped gait has a feed-forward table");
+    ff.phase
+        .iter()
+        .copied()
+        .zip(ff.torque_nm.iter().cloned())
+        .collect()
+}
+
 /// The runtime drives the outputs with joint PD, not the paper's input–output linearization:
 /// with the plan's torques as feed-forward the gait stays a stable periodic orbit under the
 /// runtime's default gains, and without them the robot loses speed every step and stops.
 #[test]
 fn shipped_gait_needs_its_feedforward_under_joint_pd() {
     let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
-    let ff = gait
-        .feedforward
-        .as_ref()
-        .expect("the shipped gait has a feed-forward table");
-    let table: Vec<(f64, Vec<f64>)> = ff
-        .phase
-        .iter()
-        .copied()
-        .zip(ff.torque_nm.iter().cloned())
-        .collect();
+    let table = feedforward_rows(&gait);
     let pd = |feedforward| Law::JointPd {
         kp_nm_per_rad: 300.0,
         kd_nm_s_per_rad: 6.0,
@@ -132,13 +136,7 @@ fn shipped_gait_needs_its_feedforward_under_joint_pd() {
 #[test]
 fn late_references_speed_the_gait_up() {
     let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
-    let ff = gait.feedforward.as_ref().expect("feed-forward table");
-    let table: Vec<(f64, Vec<f64>)> = ff
-        .phase
-        .iter()
-        .copied()
-        .zip(ff.torque_nm.iter().cloned())
-        .collect();
+    let table = feedforward_rows(&gait);
     let state = gait.initial_state.as_ref().expect("initial state");
     let steady_duration = |delay: f64| -> f64 {
         let law = Law::JointPd {

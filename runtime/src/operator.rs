@@ -209,6 +209,41 @@ pub fn operator_service_name(telemetry_service: &str) -> String {
     format!("{telemetry_service}/operator")
 }
 
+/// A node and the operator service `name` (opened or created), ports to be made by the caller.
+#[cfg(feature = "iceoryx2")]
+type OperatorService = (
+    iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+    iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+        iceoryx2::prelude::ipc::Service,
+        OperatorMessage,
+        (),
+    >,
+);
+
+#[cfg(feature = "iceoryx2")]
+fn telemetry_error(service: &str, message: String) -> crate::RuntimeError {
+    crate::RuntimeError::Telemetry {
+        service: service.to_string(),
+        message,
+    }
+}
+
+#[cfg(feature = "iceoryx2")]
+fn open_operator_service(name: &str) -> crate::Result<OperatorService> {
+    use iceoryx2::prelude::*;
+    let err = |m: String| telemetry_error(name, m);
+    let node = NodeBuilder::new()
+        .create::<ipc::Service>()
+        .map_err(|e| err(format!("node: {e:?}")))?;
+    let service_name: ServiceName = name.try_into().map_err(|e| err(format!("name: {e:?}")))?;
+    let service = node
+        .service_builder(&service_name)
+        .publish_subscribe::<OperatorMessage>()
+        .open_or_create()
+        .map_err(|e| err(format!("service: {e:?}")))?;
+    Ok((node, service))
+}
+
 /// Forwards [`OperatorMessage`]s from the iceoryx2 service `service` into `handle`, polling
 /// every 5 ms on a thread of its own, until `stop` is set. The service is opened (or created)
 /// before this returns, so a message sent after it returns is delivered.
@@ -221,28 +256,12 @@ pub fn spawn_iceoryx2_forwarder<H: CommandSink>(
     let (ready_tx, ready_rx) = std::sync::mpsc::channel();
     let name = service.to_string();
     let thread = std::thread::spawn(move || {
-        use iceoryx2::prelude::*;
-        let err = |m: String| crate::RuntimeError::Telemetry {
-            service: name.clone(),
-            message: m,
-        };
         let setup = || -> crate::Result<_> {
-            let node = NodeBuilder::new()
-                .create::<ipc::Service>()
-                .map_err(|e| err(format!("node: {e:?}")))?;
-            let service_name: ServiceName = name
-                .as_str()
-                .try_into()
-                .map_err(|e| err(format!("name: {e:?}")))?;
-            let service = node
-                .service_builder(&service_name)
-                .publish_subscribe::<OperatorMessage>()
-                .open_or_create()
-                .map_err(|e| err(format!("service: {e:?}")))?;
+            let (node, service) = open_operator_service(&name)?;
             let subscriber = service
                 .subscriber_builder()
                 .create()
-                .map_err(|e| err(format!("subscriber: {e:?}")))?;
+                .map_err(|e| telemetry_error(&name, format!("subscriber: {e:?}")))?;
             Ok((node, service, subscriber))
         };
         let (node, service, subscriber) = match setup() {
@@ -290,22 +309,8 @@ pub fn spawn_iceoryx2_forwarder<H: CommandSink>(
 /// with no subscriber is lost. Takes about 50 ms (the message is held until it is read).
 #[cfg(feature = "iceoryx2")]
 pub fn send_over_iceoryx2(service: &str, command: OperatorCommand) -> crate::Result<usize> {
-    use iceoryx2::prelude::*;
-    let err = |m: String| crate::RuntimeError::Telemetry {
-        service: service.to_string(),
-        message: m,
-    };
-    let node = NodeBuilder::new()
-        .create::<ipc::Service>()
-        .map_err(|e| err(format!("node: {e:?}")))?;
-    let service_name: ServiceName = service
-        .try_into()
-        .map_err(|e| err(format!("name: {e:?}")))?;
-    let port = node
-        .service_builder(&service_name)
-        .publish_subscribe::<OperatorMessage>()
-        .open_or_create()
-        .map_err(|e| err(format!("service: {e:?}")))?;
+    let err = |m: String| telemetry_error(service, m);
+    let (node, port) = open_operator_service(service)?;
     let publisher = port
         .publisher_builder()
         .create()
