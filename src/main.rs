@@ -72,6 +72,11 @@ enum Command {
         #[command(subcommand)]
         command: GaitCommand,
     },
+    /// MCAP logs: `adam logs info <run.mcap>`, `adam logs recover <in.mcap> [--out <out.mcap>]`.
+    Logs {
+        #[command(subcommand)]
+        command: LogsCommand,
+    },
     /// Write the URDF of ADAM for a design (GenerateModel: inertias from the cubic fits).
     GenerateUrdf {
         /// Thigh length, m.
@@ -96,6 +101,24 @@ enum GaitCommand {
         /// ε of the output controller, 1/s.
         #[arg(long, default_value_t = 10.0)]
         epsilon: f64,
+    },
+}
+
+#[derive(Subcommand)]
+enum LogsCommand {
+    /// Channels, message counts, duration, drops, safety trips, gait and design of a log.
+    Info {
+        /// The log.
+        log: PathBuf,
+    },
+    /// Rewrite a log cut off by a crash with summary and indexes: every message up to the last
+    /// complete chunk.
+    Recover {
+        /// The cut-off log.
+        log: PathBuf,
+        /// Output (default: `<log stem>.recovered.mcap` beside the input).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -394,6 +417,32 @@ fn run(cli: Cli) -> Result<()> {
         Command::Gait {
             command: GaitCommand::Check { gait, epsilon },
         } => gait_check(&gait, epsilon),
+        Command::Logs {
+            command: LogsCommand::Info { log },
+        } => {
+            print!("{}", runtime::log_read::read_info(&log)?);
+            Ok(())
+        }
+        Command::Logs {
+            command: LogsCommand::Recover { log, out },
+        } => {
+            let out = out.unwrap_or_else(|| log.with_extension("recovered.mcap"));
+            let stats = runtime::log_read::recover(&log, &out)?;
+            println!(
+                "{} -> {}: {} messages, {} attachments, {} metadata records{}",
+                log.display(),
+                out.display(),
+                stats.messages,
+                stats.attachments,
+                stats.metadata,
+                if stats.input_complete {
+                    " (the input was complete already)"
+                } else {
+                    ""
+                }
+            );
+            Ok(())
+        }
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
         Command::GenerateUrdf { thigh, shin, out } => {
             let text = generate_urdf(&DesignLengths {

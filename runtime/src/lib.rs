@@ -63,6 +63,7 @@ mod error;
 pub mod estimator;
 pub mod io;
 pub mod log;
+pub mod log_read;
 pub mod operator;
 pub mod robot;
 pub mod rt_loop;
