@@ -7,6 +7,8 @@ use model::design::{generate_urdf, DesignLengths};
 use model::PlanarModel;
 use std::path::PathBuf;
 
+mod plots;
+
 #[derive(Parser)]
 #[command(
     name = "adam",
@@ -28,8 +30,8 @@ enum Command {
         /// Where to walk.
         #[arg(long, value_enum)]
         backend: Backend,
-        /// Gait file (JSON).
-        #[arg(long, default_value = "configs/gaits/adam_walk.json")]
+        /// Gait file (JSON); default: the co-designed ADAM's.
+        #[arg(long, default_value = runtime::DEFAULT_GAIT)]
         gait: PathBuf,
         /// Runtime config (TOML).
         #[arg(long, default_value = "configs/runtime/adam.toml")]
@@ -43,9 +45,34 @@ enum Command {
         /// MCAP log file (sim; default: no log).
         #[arg(long)]
         log: Option<PathBuf>,
+        /// Seed of the simulated IMU and encoder noise (sim).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Pace the simulated run by the wall clock at the loop rate and report the loop's
+        /// wake-up jitter (sim; default: as fast as the CPU allows). A wall-clock run listens
+        /// for operator commands over iceoryx2 (`adam op`).
+        #[arg(long)]
+        real_time: bool,
+        /// Read operator commands from the keyboard, one per line (s start, w walk, p stop,
+        /// d damp, r reset, e e-stop); with --real-time.
+        #[arg(long, requires = "real_time")]
+        keyboard: bool,
         /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
+    },
+    /// Benchmarks that print a table (medians over repeated runs).
+    Bench {
+        #[command(subcommand)]
+        what: BenchWhat,
+    },
+    /// Send an operator command to a running `adam run` over iceoryx2.
+    Op {
+        /// start, walk, stop, damp, reset or estop.
+        command: String,
+        /// Runtime config (its telemetry service name locates the runtime).
+        #[arg(long, default_value = "configs/runtime/adam.toml")]
+        config: PathBuf,
     },
     /// Print a robot model: bodies, joints, total mass, leg lengths and D(q) at the nominal pose.
     Model {
@@ -54,6 +81,26 @@ enum Command {
         /// Set the design virtual joints to these total lengths, e.g. `thigh=0.24,shin=0.25`.
         #[arg(long)]
         design: Option<String>,
+    },
+    /// Co-design the thigh and shin lengths with the gait (paper Sec. III): write the
+    /// co-designed URDF and its gait file, verified like `adam gait check`.
+    Codesign {
+        /// Planner config (TOML) with its `[codesign]` section.
+        #[arg(long, default_value = "configs/planner/adam.toml")]
+        config: PathBuf,
+        /// Inertia coupling, overriding the config: `exact` (inside the NLP) or `alg1`
+        /// (the paper's Alg. 1: frozen per solve, regenerated between solves).
+        #[arg(long, value_enum)]
+        inertia: Option<InertiaArg>,
+        /// Output gait file.
+        #[arg(long, default_value = "configs/gaits/adam_codesign.json")]
+        out_gait: PathBuf,
+        /// Output URDF of the co-designed robot.
+        #[arg(long, default_value = "configs/robots/adam_codesign.urdf")]
+        out_urdf: PathBuf,
+        /// `sweep`: the convergence study instead of one co-design.
+        #[command(subcommand)]
+        study: Option<CodesignStudy>,
     },
     /// Plan a periodic HZD walking gait (the paper's two-step solve) and write the gait file.
     Plan {
@@ -177,6 +224,36 @@ fn timestamped_log_path() -> PathBuf {
 }
 
 /// Walk in simulation and print the report.
+/// A wall-clock simulated run that takes operator commands over iceoryx2 and, if asked, from
+/// the keyboard.
+fn sim_walk_operated(
+    setup: &runtime::Setup,
+    options: &runtime::sim_run::SimWalkOptions,
+    keyboard: bool,
+) -> Result<()> {
+    use runtime::operator::{self, SharedHandle};
+    let (handle, receiver) = operator::channel(64);
+    let shared = SharedHandle::new(handle);
+    let service = operator::operator_service_name(&setup.config.telemetry.service_name);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let forwarder = operator::spawn_iceoryx2_forwarder(&service, shared.clone(), stop.clone())?;
+    println!("operator commands: `adam op <command>` (iceoryx2 service {service})");
+    if keyboard {
+        println!("{}", operator::KEY_HELP);
+        // The thread ends with stdin; it is not joined (a blocked read must not hold the exit).
+        operator::spawn_keyboard(std::io::BufReader::new(std::io::stdin()), shared);
+    }
+    let report = runtime::sim_run::walk_with_operator(setup, options, Some(receiver));
+    stop.store(true, std::sync::atomic::Ordering::Release);
+    let _ = forwarder.join();
+    let report = report?;
+    println!("{report}");
+    if let Some((t, what)) = report.fall {
+        bail!("the robot fell ({what:?}) at {t:.3} s");
+    }
+    Ok(())
+}
+
 fn sim_walk(setup: &runtime::Setup, options: &runtime::sim_run::SimWalkOptions) -> Result<()> {
     if let Some(dir) = options.log_path.as_ref().and_then(|p| p.parent()) {
         if !dir.as_os_str().is_empty() {
@@ -251,6 +328,357 @@ fn show_model(urdf: &PathBuf, design: Option<&str>) -> Result<()> {
     Ok(())
 }
 
+#[derive(Subcommand)]
+enum BenchWhat {
+    /// Plan the default ADAM gait `--runs` times (fresh problem each time): set-up, iterations
+    /// and solve time per stage, and the median.
+    Plan {
+        /// Number of plans.
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// Robot.
+        #[arg(long, default_value = "configs/robots/adam_planar.urdf")]
+        robot: PathBuf,
+        /// Planner config.
+        #[arg(long, default_value = "configs/planner/adam.toml")]
+        config: PathBuf,
+    },
+}
+
+fn bench_plan(runs: usize, robot: &PathBuf, config: &PathBuf) -> Result<()> {
+    if runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let text =
+        std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
+    let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
+    let cfg = planner::config::PlannerConfig::load(config)?;
+    println!(
+        "{:>3} {:>9} {:>10} {:>11} {:>10} {:>11} {:>10}",
+        "run", "set-up s", "feas. iter", "feas. solve", "cost iter", "cost solve", "total s"
+    );
+    let mut totals = Vec::with_capacity(runs);
+    let mut iterations = Vec::with_capacity(runs);
+    let mut size = (0, 0);
+    let mut first_x: Option<Vec<f64>> = None;
+    let mut identical = true;
+    for run in 1..=runs {
+        let t0 = std::time::Instant::now();
+        let p = planner::plan::plan_gait(&model, "robot.urdf", &text, &cfg, &mut |_| {})?;
+        let total = t0.elapsed().as_secs_f64();
+        let (f, c) = (&p.stages[0], &p.stages[1]);
+        println!(
+            "{:>3} {:>9.3} {:>10} {:>10.3}s {:>10} {:>10.3}s {:>10.3}",
+            run, p.setup_time_s, f.iterations, f.solve_time_s, c.iterations, c.solve_time_s, total
+        );
+        totals.push(total);
+        iterations.push(f.iterations + c.iterations);
+        size = p.size;
+        match &first_x {
+            None => first_x = Some(p.x.clone()),
+            Some(x) => identical &= *x == p.x,
+        }
+    }
+    totals.sort_by(f64::total_cmp);
+    iterations.sort_unstable();
+    println!(
+        "\nADAM, {} variables, {} constraints: median {:.2} s and {} iterations over {runs} plans \
+         (set-up, both solves and the feed-forward table); the solutions are {}",
+        size.0,
+        size.1,
+        totals[runs / 2],
+        iterations[runs / 2],
+        if identical {
+            "bit-identical"
+        } else {
+            "NOT bit-identical"
+        }
+    );
+    println!(
+        "anchors: CasADi + IPOPT + MUMPS on the same kind of problem (PLANNER-NOTES) 1.19 s solve \
+         + 1.96 s set-up; a published five-link optimization (571 variables) 143 IPOPT iterations, ~12 s in MATLAB"
+    );
+    Ok(())
+}
+
+#[derive(Subcommand)]
+enum CodesignStudy {
+    /// The paper's convergence study: co-design from an n × n grid of initial thigh and shin
+    /// lengths over the config's bounds, in parallel on all cores; writes sweep.csv, table.md
+    /// (like the paper's Table II) and convergence.png/.svg (like its Fig. 3).
+    Sweep {
+        /// Grid size n (n × n runs).
+        #[arg(long, default_value_t = 5)]
+        grid: usize,
+        /// Output folder.
+        #[arg(long, default_value = "logs/codesign-sweep")]
+        out_dir: PathBuf,
+    },
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum InertiaArg {
+    Exact,
+    Alg1,
+}
+
+fn progress_printer() -> impl FnMut(planner::plan::Progress<'_>) {
+    let mut last_print = std::time::Instant::now();
+    move |p| match p {
+        planner::plan::Progress::Stage(s) => println!("solve: {s}"),
+        planner::plan::Progress::Iteration(_, r) => {
+            if r.iteration % 10 == 0 || last_print.elapsed().as_secs_f64() > 1.0 {
+                println!(
+                    "  iter {:>4}  objective {:>12.6e}  infeasibility {:>9.2e}  dual {:>9.2e}",
+                    r.iteration, r.objective, r.primal_infeasibility, r.dual_infeasibility
+                );
+                last_print = std::time::Instant::now();
+            }
+        }
+    }
+}
+
+fn codesign(
+    config: &PathBuf,
+    inertia: Option<InertiaArg>,
+    out_gait: &PathBuf,
+    out_urdf: &PathBuf,
+) -> Result<()> {
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(i) = inertia {
+        cfg.codesign.inertia = match i {
+            InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
+            InertiaArg::Alg1 => planner::config::InertiaCoupling::Alg1,
+        };
+    }
+    for path in [out_gait, out_urdf] {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+    }
+    let urdf_ref = relative_path(out_urdf, out_gait);
+    let r = planner::codesign::codesign(&cfg, &urdf_ref, &mut progress_printer())?;
+    std::fs::write(out_urdf, &r.urdf).with_context(|| format!("writing {}", out_urdf.display()))?;
+    r.planned.gait.save(out_gait)?;
+    println!(
+        "\nco-design ({:?} inertia coupling), {:.1} s in all",
+        cfg.codesign.inertia, r.wall_time_s
+    );
+    println!(
+        "{:>5} {:>16} {:>16} {:>8} {:>6} {:>9}",
+        "outer", "start thigh/shin", "found thigh/shin", "CoT", "iter", "solve s"
+    );
+    for (j, o) in r.outer.iter().enumerate() {
+        println!(
+            "{:>5} {:>7.4}/{:<8.4} {:>7.4}/{:<8.4} {:>8.5} {:>6} {:>9.2}",
+            j + 1,
+            o.start_m[0],
+            o.start_m[1],
+            o.lengths_m[0],
+            o.lengths_m[1],
+            o.cost_of_transport,
+            o.report.iterations,
+            o.report.solve_time_s
+        );
+    }
+    let (g0, g) = (&r.initial.gait, &r.planned.gait);
+    println!(
+        "\n{:<22} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8}",
+        "design", "thigh m", "shin m", "step m", "period s", "speed m/s", "CoT"
+    );
+    for (name, gg) in [("initial (fixed)", g0), ("co-designed", g)] {
+        println!(
+            "{:<22} {:>8.4} {:>8.4} {:>9.4} {:>9.4} {:>9.4} {:>8.5}",
+            name,
+            gg.design.thigh_length_m,
+            gg.design.shin_length_m,
+            gg.step_length_m,
+            gg.step_duration_s,
+            gg.speed_mps,
+            gg.cost_of_transport
+        );
+    }
+    if !r.converged {
+        println!("warning: the outer loop stopped at its iteration limit before ‖ΔL‖ < δ");
+    }
+    // Gaits optimized at fixed designs, for comparison: the four corners of the design box and
+    // the paper's optimum, each warm-started from the initial design's gait.
+    let c = &cfg.codesign;
+    let fixed = [
+        ("box corner", [c.thigh_m[0], c.shin_m[0]]),
+        ("box corner", [c.thigh_m[0], c.shin_m[1]]),
+        ("box corner", [c.thigh_m[1], c.shin_m[0]]),
+        ("box corner", [c.thigh_m[1], c.shin_m[1]]),
+        ("paper's optimum", [0.2425, 0.2515]),
+    ];
+    let designs: Vec<[f64; 2]> = fixed.iter().map(|f| f.1).collect();
+    println!("\noptimizing the gait at fixed designs for comparison ...");
+    let outcomes = planner::codesign::compare_fixed_designs(&cfg, &r.initial, &designs);
+    for ((name, d), o) in fixed.iter().zip(&outcomes) {
+        match o {
+            Ok(o) => println!(
+                "{:<22} {:>8.4} {:>8.4} {:>9.4} {:>9.4} {:>9.4} {:>8.5}",
+                name,
+                d[0],
+                d[1],
+                o.step_length_m,
+                o.step_duration_s,
+                o.speed_mps,
+                o.cost_of_transport
+            ),
+            Err(e) => println!("{:<22} {:>8.4} {:>8.4} failed: {e}", name, d[0], d[1]),
+        }
+    }
+    println!("wrote {} and {}", out_gait.display(), out_urdf.display());
+    gait_check(out_gait, 10.0)
+}
+
+/// Relative cost of transport above the best run that marks a worse local minimum.
+const LOCAL_MINIMUM_MARGIN: f64 = 0.01;
+
+fn codesign_sweep(
+    config: &PathBuf,
+    inertia: Option<InertiaArg>,
+    grid: usize,
+    out_dir: &PathBuf,
+) -> Result<()> {
+    use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
+    if !(1..=20).contains(&grid) {
+        bail!("--grid {grid}: must be in 1..=20");
+    }
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(i) = inertia {
+        cfg.codesign.inertia = match i {
+            InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
+            InertiaArg::Alg1 => planner::config::InertiaCoupling::Alg1,
+        };
+    }
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let start = std::time::Instant::now();
+    let model_lengths = cfg.codesign.initial_m;
+    let (model, urdf) = model::design::generate_model(&DesignLengths {
+        thigh_length_m: model_lengths[0],
+        shin_length_m: model_lengths[1],
+    })?;
+    println!(
+        "warm start: planning the gait at thigh {} m, shin {} m",
+        model_lengths[0], model_lengths[1]
+    );
+    let initial = planner::plan::plan_gait(&model, "robot.urdf", &urdf, &cfg, &mut |_| {})?;
+    let warm_s = start.elapsed().as_secs_f64();
+    let starts = sweep_grid(&cfg, grid);
+    let bar = indicatif::ProgressBar::new(starts.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} runs, {elapsed} elapsed, ETA {eta} {msg}",
+        )
+        .map_err(|e| anyhow::anyhow!("{e}"))?,
+    );
+    let runs = sweep(&cfg, &initial, model_lengths, &starts, &|r| {
+        bar.inc(1);
+        if let Ok(o) = &r.outcome {
+            bar.set_message(format!(
+                "last: {:.3}/{:.3} → {:.4}/{:.4}",
+                r.initial_m[0], r.initial_m[1], o.lengths_m[0], o.lengths_m[1]
+            ));
+        }
+    });
+    bar.finish();
+    let wall_s = start.elapsed().as_secs_f64();
+    let minima = local_minima(&runs, LOCAL_MINIMUM_MARGIN);
+    // CSV of every run.
+    let mut csv = String::from("initial_thigh_m,initial_shin_m,status,thigh_m,shin_m,step_length_m,step_duration_s,speed_mps,cost_of_transport,iterations,solve_time_s,wall_time_s,local_minimum\n");
+    for (r, &lm) in runs.iter().zip(&minima) {
+        match &r.outcome {
+            Ok(o) => {
+                csv += &format!(
+                    "{},{},ok,{},{},{},{},{},{},{},{},{},{}\n",
+                    r.initial_m[0],
+                    r.initial_m[1],
+                    o.lengths_m[0],
+                    o.lengths_m[1],
+                    o.step_length_m,
+                    o.step_duration_s,
+                    o.speed_mps,
+                    o.cost_of_transport,
+                    o.iterations,
+                    o.solve_time_s,
+                    r.wall_time_s,
+                    lm
+                )
+            }
+            Err(e) => {
+                csv += &format!(
+                    "{},{},\"failed: {}\",,,,,,,,,{},\n",
+                    r.initial_m[0],
+                    r.initial_m[1],
+                    e.replace('"', "'"),
+                    r.wall_time_s
+                )
+            }
+        }
+    }
+    std::fs::write(out_dir.join("sweep.csv"), csv)?;
+    // Table II: mean ± std over the runs that are not local minima.
+    let good: Vec<&planner::codesign::SweepOutcome> = runs
+        .iter()
+        .zip(&minima)
+        .filter(|(_, &lm)| !lm)
+        .filter_map(|(r, _)| r.outcome.as_ref().ok())
+        .collect();
+    let col = |f: fn(&planner::codesign::SweepOutcome) -> f64| {
+        mean_std(&good.iter().map(|o| f(o)).collect::<Vec<_>>())
+    };
+    let rows = [
+        ("thigh length (m)", col(|o| o.lengths_m[0]), "0.2425"),
+        ("shin length (m)", col(|o| o.lengths_m[1]), "0.2515"),
+        ("step length (m)", col(|o| o.step_length_m), "—"),
+        ("step duration (s)", col(|o| o.step_duration_s), "—"),
+        ("speed (m/s)", col(|o| o.speed_mps), "—"),
+        ("cost of transport", col(|o| o.cost_of_transport), "—"),
+        ("solve time (s)", col(|o| o.solve_time_s), "—"),
+    ];
+    let failed = runs.iter().filter(|r| r.outcome.is_err()).count();
+    let n_minima = minima.iter().filter(|&&m| m).count();
+    let mut md = format!(
+        "# Co-design convergence study\n\n{} runs from a {grid}×{grid} grid of initial thigh/shin lengths over [{}, {}] × [{}, {}] m, {:?} inertia coupling; warm start planned at {}/{} m in {:.1} s; {:.1} s wall time in all on {} threads.\n\n{} runs converged to the best design, {} ended in a worse local minimum (cost of transport more than {:.0} % above the best), {} failed.\n\n| quantity | mean | std | paper |\n|---|---|---|---|\n",
+        runs.len(), cfg.codesign.thigh_m[0], cfg.codesign.thigh_m[1], cfg.codesign.shin_m[0],
+        cfg.codesign.shin_m[1], cfg.codesign.inertia, model_lengths[0], model_lengths[1], warm_s,
+        wall_s, rayon_threads(), good.len(), n_minima, LOCAL_MINIMUM_MARGIN * 100.0, failed
+    );
+    for (name, (m, sd), paper) in rows {
+        md += &format!("| {name} | {m:.4} | {sd:.4} | {paper} |\n");
+    }
+    std::fs::write(out_dir.join("table.md"), &md)?;
+    print!("\n{md}");
+    let arrows: Vec<plots::ConvergenceArrow> = runs
+        .iter()
+        .zip(&minima)
+        .filter_map(|(r, &lm)| {
+            r.outcome.as_ref().ok().map(|o| plots::ConvergenceArrow {
+                from_m: (r.initial_m[0], r.initial_m[1]),
+                to_m: (o.lengths_m[0], o.lengths_m[1]),
+                local_minimum: lm,
+            })
+        })
+        .collect();
+    plots::convergence(
+        &out_dir.join("convergence"),
+        &arrows,
+        [cfg.codesign.thigh_m, cfg.codesign.shin_m],
+        (0.2425, 0.2515),
+    )?;
+    println!(
+        "\nwrote {0}/sweep.csv, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
+        out_dir.display()
+    );
+    Ok(())
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
     let text =
         std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
@@ -317,7 +745,18 @@ fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
 
 /// `target` as seen from the folder of `from` (for the gait file's robot reference).
 fn relative_path(target: &std::path::Path, from: &std::path::Path) -> String {
-    let abs = |p: &std::path::Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    // A file that does not exist yet: its folder's canonical path joined with its name.
+    let abs = |p: &std::path::Path| {
+        std::fs::canonicalize(p)
+            .or_else(|_| {
+                let dir = match p.parent() {
+                    Some(d) if !d.as_os_str().is_empty() => d,
+                    _ => std::path::Path::new("."),
+                };
+                std::fs::canonicalize(dir).map(|d| d.join(p.file_name().unwrap_or_default()))
+            })
+            .unwrap_or_else(|_| p.to_path_buf())
+    };
     let t = abs(target);
     let f = from.parent().map(abs).unwrap_or_default();
     let (tc, fc): (Vec<_>, Vec<_>) = (t.components().collect(), f.components().collect());
@@ -357,7 +796,7 @@ fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
 }
 
 fn demo() -> Result<()> {
-    let gait = PathBuf::from("configs/gaits/adam_walk.json");
+    let gait = PathBuf::from(runtime::DEFAULT_GAIT);
     let config = PathBuf::from("configs/runtime/adam.toml");
     let setup = runtime::Setup::load(&config, &gait)?;
     let g = &setup.gait;
@@ -394,6 +833,9 @@ fn run(cli: Cli) -> Result<()> {
             duration,
             belt,
             log,
+            seed,
+            real_time,
+            keyboard,
             can_interfaces,
         } => {
             let setup = runtime::Setup::load(&config, &gait)?;
@@ -402,7 +844,13 @@ fn run(cli: Cli) -> Result<()> {
                     let mut options = runtime::sim_run::SimWalkOptions::new(duration);
                     options.belt_speed_mps = belt;
                     options.log_path = log;
-                    sim_walk(&setup, &options)
+                    options.seed = seed;
+                    options.real_time = real_time;
+                    if real_time {
+                        sim_walk_operated(&setup, &options, keyboard)
+                    } else {
+                        sim_walk(&setup, &options)
+                    }
                 }
                 Backend::Can => {
                     let interfaces = can_interfaces
@@ -444,6 +892,41 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
+        Command::Bench {
+            what:
+                BenchWhat::Plan {
+                    runs,
+                    robot,
+                    config,
+                },
+        } => bench_plan(runs, &robot, &config),
+        Command::Op { command, config } => {
+            let cmd = runtime::operator::parse_key(&command).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "unknown operator command {command:?}: start, walk, stop, damp, reset or estop"
+                )
+            })?;
+            let cfg = runtime::config::RuntimeConfig::load(&config)?;
+            let service = runtime::operator::operator_service_name(&cfg.telemetry.service_name);
+            let receivers = runtime::operator::send_over_iceoryx2(&service, cmd)?;
+            println!("sent {cmd:?} on {service} to {receivers} runtime(s)");
+            if receivers == 0 {
+                bail!("no runtime is listening on {service}");
+            }
+            Ok(())
+        }
+        Command::Codesign {
+            config,
+            inertia,
+            out_gait,
+            out_urdf,
+            study,
+        } => match study {
+            None => codesign(&config, inertia, &out_gait, &out_urdf),
+            Some(CodesignStudy::Sweep { grid, out_dir }) => {
+                codesign_sweep(&config, inertia, grid, &out_dir)
+            }
+        },
         Command::GenerateUrdf { thigh, shin, out } => {
             let text = generate_urdf(&DesignLengths {
                 thigh_length_m: thigh,
@@ -456,5 +939,31 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::relative_path;
+    use std::path::Path;
+
+    #[test]
+    fn relative_paths_between_config_folders_even_for_files_not_written_yet() {
+        let dir = std::env::temp_dir().join(format!("adam-rel-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("configs/robots")).expect("dir");
+        std::fs::create_dir_all(dir.join("configs/gaits")).expect("dir");
+        let urdf = dir.join("configs/robots/new.urdf");
+        let gait = dir.join("configs/gaits/new.json");
+        assert_eq!(relative_path(&urdf, &gait), "../robots/new.urdf");
+        std::fs::write(&urdf, "x").expect("write");
+        assert_eq!(relative_path(&urdf, &gait), "../robots/new.urdf");
+        assert_eq!(
+            relative_path(
+                Path::new("configs/robots/adam_planar.urdf"),
+                Path::new("configs/gaits/g.json")
+            ),
+            "../robots/adam_planar.urdf"
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

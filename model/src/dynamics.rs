@@ -336,10 +336,21 @@ impl PlanarModel {
         dq_minus: &[S],
         impact_frame: usize,
     ) -> Result<Impact<S>> {
+        self.impact_with(&self.inertias(), q, dq_minus, impact_frame)
+    }
+
+    /// [`Self::impact`] with the given mass properties (one per body), for the co-design.
+    pub fn impact_with<S: Real>(
+        &self,
+        inertias: &[BodyInertia<S>],
+        q: &[S],
+        dq_minus: &[S],
+        impact_frame: usize,
+    ) -> Result<Impact<S>> {
         let n = self.dof();
         let design = self.design_joints();
         let m = 2 + design.len();
-        let dy = self.dynamics(q, dq_minus)?;
+        let dy = self.dynamics_with(inertias, q, dq_minus)?;
         let st = self.body_poses(q)?;
         let jac = self.frame_jacobian(&st, impact_frame);
         let mut a = DMatrix::from_element(n + m, n + m, S::zero());

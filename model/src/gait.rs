@@ -132,6 +132,51 @@ pub struct SolverSummary {
     pub constraint_violation: f64,
 }
 
+/// Largest number of samples of a [`FeedforwardTable`] (the runtime keeps them in a fixed array).
+pub const MAX_FEEDFORWARD_SAMPLES: usize = 256;
+
+/// The planned actuator torques along the step, by phase: the runtime's optional feed-forward
+/// term. Linear interpolation between samples, held at the ends.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeedforwardTable {
+    /// Phase τ of each sample, strictly increasing (normally 0 to 1).
+    pub phase: Vec<f64>,
+    /// Torque of each output's joint at each sample (`torque_nm[sample][output]`), N·m.
+    pub torque_nm: Vec<Vec<f64>>,
+}
+
+impl FeedforwardTable {
+    /// Torque of each output at phase `tau` into `out` (one entry per output), N·m.
+    pub fn eval(&self, tau: f64, out: &mut [f64]) {
+        interpolate(&self.phase, &self.torque_nm, tau, out);
+    }
+}
+
+/// Linear interpolation of rows `values[i]` at abscissae `knots[i]` (increasing), held at the
+/// ends; `out` gets zeros for an empty table. Allocation-free.
+pub fn interpolate<R: AsRef<[f64]>>(knots: &[f64], values: &[R], tau: f64, out: &mut [f64]) {
+    out.iter_mut().for_each(|v| *v = 0.0);
+    let n = knots.len().min(values.len());
+    if n == 0 {
+        return;
+    }
+    let i = knots[..n].partition_point(|t| *t <= tau);
+    if i == 0 || i == n {
+        let row = values[if i == 0 { 0 } else { n - 1 }].as_ref();
+        for (v, r) in out.iter_mut().zip(row) {
+            *v = *r;
+        }
+        return;
+    }
+    let (t0, t1) = (knots[i - 1], knots[i]);
+    let w = if t1 > t0 { (tau - t0) / (t1 - t0) } else { 0.0 };
+    let (a, b) = (values[i - 1].as_ref(), values[i].as_ref());
+    for ((v, p), q) in out.iter_mut().zip(a).zip(b) {
+        *v = p + w * (q - p);
+    }
+}
+
 /// A planned periodic HZD gait.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -161,6 +206,9 @@ pub struct GaitFile {
     /// The post-impact state x⁺ at the start of the step (optional).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_state: Option<RobotState>,
+    /// The planned torques by phase, for the runtime's feed-forward term (optional).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedforward: Option<FeedforwardTable>,
     /// Solver summary.
     pub solver: SolverSummary,
 }
@@ -338,6 +386,48 @@ impl GaitFile {
             for (name, v) in [("q", &state.q), ("dq", &state.dq)] {
                 for (k, x) in v.iter().enumerate() {
                     finite(&format!("initial_state.{name}[{k}]"), *x)?;
+                }
+            }
+        }
+        if let Some(ff) = &self.feedforward {
+            let n = ff.phase.len();
+            if !(2..=MAX_FEEDFORWARD_SAMPLES).contains(&n) {
+                return Err(invalid(
+                    "feedforward.phase".into(),
+                    format!("{n} samples"),
+                    &format!("needs 2..={MAX_FEEDFORWARD_SAMPLES} samples"),
+                ));
+            }
+            if ff.torque_nm.len() != n {
+                return Err(invalid(
+                    "feedforward.torque_nm".into(),
+                    format!("{} rows", ff.torque_nm.len()),
+                    &format!("needs one row per phase sample ({n})"),
+                ));
+            }
+            for (k, t) in ff.phase.iter().enumerate() {
+                finite(&format!("feedforward.phase[{k}]"), *t)?;
+                if k > 0 && *t <= ff.phase[k - 1] {
+                    return Err(invalid(
+                        format!("feedforward.phase[{k}]"),
+                        t.to_string(),
+                        &format!(
+                            "must be greater than the previous sample {}",
+                            ff.phase[k - 1]
+                        ),
+                    ));
+                }
+            }
+            for (k, row) in ff.torque_nm.iter().enumerate() {
+                if row.len() != self.outputs.len() {
+                    return Err(invalid(
+                        format!("feedforward.torque_nm[{k}]"),
+                        format!("{} entries", row.len()),
+                        &format!("needs one per output ({})", self.outputs.len()),
+                    ));
+                }
+                for (i, v) in row.iter().enumerate() {
+                    finite(&format!("feedforward.torque_nm[{k}][{i}]"), *v)?;
                 }
             }
         }

@@ -31,6 +31,10 @@ fn sample() -> GaitFile {
             q: vec![0.0; 11],
             dq: vec![0.0; 11],
         }),
+        feedforward: Some(FeedforwardTable {
+            phase: vec![0.0, 0.5, 1.0],
+            torque_nm: vec![vec![1.0, -2.0, 0.5, 0.0]; 3],
+        }),
         solver: SolverSummary {
             solver: "test".into(),
             status: "optimal".into(),
@@ -126,4 +130,58 @@ fn output_joint_names_follow_the_stance_leg() {
     assert_eq!(outs[0].joint_name(Side::Right), "right_hip_pitch");
     assert_eq!(outs[3].joint_name(Side::Right), "left_knee_pitch");
     assert_eq!(outs[3].joint_name(Side::Left), "right_knee_pitch");
+}
+
+#[test]
+fn feedforward_tables_are_checked_and_interpolate_linearly() {
+    let mut g = sample();
+    g.feedforward = Some(FeedforwardTable {
+        phase: vec![0.0, 0.5, 0.4],
+        torque_nm: vec![vec![0.0; 4]; 3],
+    });
+    let e = reject(&g);
+    assert!(
+        e.contains("feedforward.phase[2]") && e.contains("0.4"),
+        "{e}"
+    );
+    g.feedforward = Some(FeedforwardTable {
+        phase: vec![0.0, 1.0],
+        torque_nm: vec![vec![0.0; 4], vec![0.0; 3]],
+    });
+    let e = reject(&g);
+    assert!(
+        e.contains("feedforward.torque_nm[1]") && e.contains("3 entries"),
+        "{e}"
+    );
+    g.feedforward = Some(FeedforwardTable {
+        phase: vec![0.0, 1.0],
+        torque_nm: vec![vec![0.0; 4], vec![f64::NAN, 0.0, 0.0, 0.0]],
+    });
+    // JSON has no NaN: check the in-memory validation (what `save` runs).
+    let e = g.validate("g.json").expect_err("NaN torque").to_string();
+    assert!(e.contains("feedforward.torque_nm[1][0]"), "{e}");
+    // A gait without the table (older planner) still loads.
+    g.feedforward = None;
+    let text = serde_json::to_string(&g).expect("serializes");
+    assert!(!text.contains("feedforward"));
+    assert_eq!(GaitFile::from_json(&text, "g.json").expect("loads"), g);
+
+    let table = FeedforwardTable {
+        phase: vec![0.0, 0.5, 1.0],
+        torque_nm: vec![vec![0.0, 10.0], vec![1.0, 20.0], vec![3.0, 0.0]],
+    };
+    let mut out = [0.0; 2];
+    for (tau, want) in [
+        (-0.2, [0.0, 10.0]),
+        (0.25, [0.5, 15.0]),
+        (0.5, [1.0, 20.0]),
+        (0.75, [2.0, 10.0]),
+        (1.3, [3.0, 0.0]),
+    ] {
+        table.eval(tau, &mut out);
+        assert!(
+            (out[0] - want[0]).abs() < 1e-12 && (out[1] - want[1]).abs() < 1e-12,
+            "tau {tau}: {out:?} vs {want:?}"
+        );
+    }
 }

@@ -113,6 +113,19 @@ impl PlanarBiped {
 
     /// Full (q, q̇, q̈) from the reduced state, with the stance foot pinned at the origin.
     pub fn full_state<S: Real>(&self, qr: &[S], dqr: &[S], ddqr: &[S]) -> Result<[Vec<S>; 3]> {
+        self.full_state_design(qr, dqr, ddqr, None)
+    }
+
+    /// [`Self::full_state`] with the design joints of both legs set to `design` = [thigh, shin]
+    /// design-joint values, m (the co-design's variables; left = right), instead of the fixed
+    /// values this biped was built with.
+    pub fn full_state_design<S: Real>(
+        &self,
+        qr: &[S],
+        dqr: &[S],
+        ddqr: &[S],
+        design: Option<[S; 2]>,
+    ) -> Result<[Vec<S>; 3]> {
         let n = self.model.dof();
         let z = S::zero();
         let (mut q, mut dq, mut ddq) = (vec![z; n], vec![z; n], vec![z; n]);
@@ -123,6 +136,17 @@ impl PlanarBiped {
         }
         for &(c, v) in &self.design {
             q[c] = S::from(v);
+        }
+        if let Some([thigh, shin]) = design {
+            for side in [Side::Left, Side::Right] {
+                let leg = self.legs.side(side);
+                if let Some(j) = leg.thigh_design {
+                    q[self.model.joints[j].coordinate] = thigh;
+                }
+                if let Some(j) = leg.shin_design {
+                    q[self.model.joints[j].coordinate] = shin;
+                }
+            }
         }
         let st = self.model.body_states(&q, &dq)?;
         let foot = self.legs.side(self.stance).foot;

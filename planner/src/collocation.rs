@@ -63,6 +63,8 @@ pub struct Layout {
     pub intervals: usize,
     /// Variables per point.
     pub stride: usize,
+    /// Design variables (0, or 2 in a co-design: thigh and shin length, m).
+    pub design: usize,
 }
 
 impl Layout {
@@ -122,9 +124,13 @@ impl Layout {
     pub fn length(&self) -> usize {
         self.theta_plus() + 3
     }
+    /// Index of design variable i (0: thigh length, 1: shin length, m) in a co-design.
+    pub fn design_var(&self, i: usize) -> usize {
+        self.theta_plus() + 4 + i
+    }
     /// Number of variables.
     pub fn len(&self) -> usize {
-        self.theta_plus() + 4
+        self.theta_plus() + 4 + self.design
     }
     /// Whether there are no variables (never).
     pub fn is_empty(&self) -> bool {
@@ -206,6 +212,7 @@ pub struct HzdProblem {
     slack_weights: Vec<(usize, f64)>,
     initial: Vec<f64>,
     total_mass_kg: f64,
+    design: Option<DesignModel>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -222,6 +229,33 @@ struct ObjectiveSlots {
 /// not to shape the gait, large enough to give the interior point a bounded, strictly convex
 /// objective in the torques (a zero objective left the first solve wandering for minutes).
 pub const FEASIBILITY_TORQUE_WEIGHT: f64 = 1e-4;
+
+/// Co-design (paper Sec. III): the thigh and shin lengths become NLP variables. They enter
+/// through the design virtual joints q_D = L − L_nominal, the same in both legs (so q_LT = q_RT
+/// and q_LS = q_RS hold by construction) and constant over the step (q̇_D = 0: they are
+/// parameters of every point); the relabeling keeps them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Codesign {
+    /// Total thigh and shin length at design-joint zero (the model's own links), m.
+    pub nominal_m: [f64; 2],
+    /// Bounds on the total thigh and shin length, m (paper Table I: 0.15–0.35).
+    pub bounds_m: [[f64; 2]; 2],
+    /// Link mass properties follow the lengths through the cubic fits inside the NLP (exact
+    /// coupling, differentiated with everything else); false: frozen at the model's (the
+    /// inner solve of the paper's Alg. 1).
+    pub exact_inertia: bool,
+}
+
+/// What the co-design needs of the model: the thigh and shin bodies of both legs and the fits.
+#[derive(Clone, Debug)]
+struct DesignModel {
+    spec: Codesign,
+    /// Body index of the left and right thigh, and of the left and right shin.
+    thigh_bodies: [usize; 2],
+    shin_bodies: [usize; 2],
+    fits: model::design::InertiaFits,
+    base: Vec<model::robot::BodyInertia<f64>>,
+}
 
 /// Structural Jacobian entries (local output, local var) and Hessian pairs (local, local).
 type Pattern = (Vec<(usize, usize)>, Vec<(usize, usize)>);
@@ -241,6 +275,49 @@ impl HzdProblem {
         initial: Vec<f64>,
         with_cost: bool,
     ) -> crate::Result<Self> {
+        Self::with_codesign(biped, config, initial, with_cost, None)
+    }
+
+    /// Builds the problem, with the thigh and shin lengths as variables if `codesign` is given
+    /// (the model must have design joints in both legs).
+    pub fn with_codesign(
+        biped: PlanarBiped,
+        config: PlannerConfig,
+        initial: Vec<f64>,
+        with_cost: bool,
+        codesign: Option<Codesign>,
+    ) -> crate::Result<Self> {
+        let design = match codesign {
+            None => None,
+            Some(spec) => {
+                let robot_error = |reason: String| crate::PlannerError::Robot {
+                    robot: biped.model.name.clone(),
+                    reason,
+                };
+                let mut thigh_bodies = [0; 2];
+                let mut shin_bodies = [0; 2];
+                for (k, side) in [model::Side::Left, model::Side::Right]
+                    .into_iter()
+                    .enumerate()
+                {
+                    let leg = biped.legs.side(side);
+                    if leg.thigh_design.is_none() || leg.shin_design.is_none() {
+                        return Err(robot_error(format!(
+                            "co-design needs thigh and shin design joints in the {side:?} leg"
+                        )));
+                    }
+                    thigh_bodies[k] = biped.model.joints[leg.hip].body;
+                    shin_bodies[k] = biped.model.joints[leg.knee].body;
+                }
+                Some(DesignModel {
+                    spec,
+                    thigh_bodies,
+                    shin_bodies,
+                    fits: model::design::InertiaFits::adam(),
+                    base: biped.model.bodies.iter().map(|b| b.inertia).collect(),
+                })
+            }
+        };
         let layout = Layout {
             nq: biped.nq(),
             nu: biped.nu(),
@@ -248,6 +325,7 @@ impl HzdProblem {
             degree: config.collocation.bezier_degree,
             intervals: config.collocation.intervals,
             stride: 3 * biped.nq() + 3 * biped.nu() + 3,
+            design: if design.is_some() { 2 } else { 0 },
         };
         if config.cost.weights.len() != layout.nu {
             return Err(crate::PlannerError::InvalidField {
@@ -273,6 +351,7 @@ impl HzdProblem {
             slack_weights: Vec::new(),
             initial,
             total_mass_kg,
+            design,
         };
         p.build_blocks();
         p.build_patterns();
@@ -417,6 +496,15 @@ impl HzdProblem {
         lo.extend([0.0, 0.0, 0.0, g.liftoff_velocity_mps]);
         hi.extend([inf, inf, inf, inf]);
         self.add(Kind::Impact, vars, &lo, &hi);
+        // Co-design: every block that evaluates the model also sees the two lengths.
+        if l.design > 0 {
+            let dv = [l.design_var(0), l.design_var(1)];
+            for blk in &mut self.blocks {
+                if Self::uses_model(blk.kind) {
+                    blk.vars.extend(dv);
+                }
+            }
+        }
         // Cost weights of the slack variables.
         for k in 0..l.points() {
             for a in 0..nu {
@@ -562,8 +650,66 @@ impl HzdProblem {
         self.eval_block(kind, &zh, out)
     }
 
+    /// Whether a block kind evaluates the robot model (and so depends on the design).
+    fn uses_model(kind: Kind) -> bool {
+        matches!(
+            kind,
+            Kind::Dynamics | Kind::PhaseLift | Kind::SwingHeight | Kind::SwingEnd | Kind::Impact
+        )
+    }
+
+    /// The design-joint values [thigh, shin] of a model block's local variables (its last two
+    /// are the total lengths in a co-design), or None without co-design.
+    fn design_joints_of<S: Real>(&self, kind: Kind, z: &[S]) -> Option<[S; 2]> {
+        let d = self.design.as_ref()?;
+        if !Self::uses_model(kind) {
+            return None;
+        }
+        let n = z.len();
+        Some([
+            z[n - 2] - d.spec.nominal_m[0],
+            z[n - 1] - d.spec.nominal_m[1],
+        ])
+    }
+
+    /// Body mass properties at the lengths of a model block's local variables: the cubic fits
+    /// for thighs and shins under exact coupling, the model's own otherwise.
+    fn inertias_of<S: Real>(&self, kind: Kind, z: &[S]) -> Vec<model::robot::BodyInertia<S>> {
+        let base = || self.biped.model.inertias::<S>();
+        let Some(d) = self.design.as_ref().filter(|d| d.spec.exact_inertia) else {
+            return base();
+        };
+        if !Self::uses_model(kind) {
+            return base();
+        }
+        let n = z.len();
+        let (lt, ls) = (z[n - 2], z[n - 1]);
+        let mut all: Vec<model::robot::BodyInertia<S>> = d
+            .base
+            .iter()
+            .map(|i| model::robot::BodyInertia {
+                mass_kg: S::from(i.mass_kg),
+                com_xz_m: [S::from(i.com_xz_m[0]), S::from(i.com_xz_m[1])],
+                inertia_yy_kgm2: S::from(i.inertia_yy_kgm2),
+            })
+            .collect();
+        let link = |fit: &model::design::LinkFit, len: S| model::robot::BodyInertia {
+            mass_kg: fit.mass_kg.eval(len),
+            com_xz_m: [S::zero(), -fit.com_distance_m.eval(len)],
+            inertia_yy_kgm2: fit.iyy_kgm2.eval(len),
+        };
+        for &b in &d.thigh_bodies {
+            all[b] = link(&d.fits.thigh, lt);
+        }
+        for &b in &d.shin_bodies {
+            all[b] = link(&d.fits.shin, ls);
+        }
+        all
+    }
+
     /// Evaluates one block at local variables `z`.
     fn eval_block<S: Real>(&self, kind: Kind, z: &[S], out: &mut [S]) -> Result<(), DomainError> {
+        let design = self.design_joints_of(kind, z);
         let bp = &self.biped;
         let l = &self.layout;
         let (nq, nu) = (l.nq, l.nu);
@@ -574,10 +720,12 @@ impl HzdProblem {
                 let (qr, dqr) = (&z[..nq], &z[nq..2 * nq]);
                 let ddqr: Vec<S> = z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect();
                 let us = &z[3 * nq..3 * nq + nu];
-                let [q, dq, ddq] = bp.full_state(qr, dqr, &ddqr).map_err(|_| DomainError)?;
+                let [q, dq, ddq] = bp
+                    .full_state_design(qr, dqr, &ddqr, design)
+                    .map_err(|_| DomainError)?;
                 let r = bp
                     .model
-                    .inverse_dynamics(&q, &dq, &ddq)
+                    .inverse_dynamics_with(&self.inertias_of(kind, z), &q, &dq, &ddq)
                     .map_err(|_| DomainError)?;
                 let lam = [r[0], r[1]];
                 let jac = bp.stance_jacobian(&q).map_err(|_| DomainError)?;
@@ -596,7 +744,9 @@ impl HzdProblem {
                 let ddqr: Vec<S> = z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect();
                 let r = &z[3 * nq..];
                 let (tp, tm, tau, tau_d, tau_dd) = (r[0], r[1], r[2], r[3], r[4]);
-                let [q, dq, ddq] = bp.full_state(qr, dqr, &ddqr).map_err(|_| DomainError)?;
+                let [q, dq, ddq] = bp
+                    .full_state_design(qr, dqr, &ddqr, design)
+                    .map_err(|_| DomainError)?;
                 let th = bp
                     .model
                     .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)
@@ -645,7 +795,7 @@ impl HzdProblem {
                     &zero[..]
                 };
                 let [q, dq, _] = bp
-                    .full_state(&z[..nq], dqr, &zero)
+                    .full_state_design(&z[..nq], dqr, &zero, design)
                     .map_err(|_| DomainError)?;
                 let st = bp.model.body_states(&q, &dq).map_err(|_| DomainError)?;
                 let foot = bp.legs.side(bp.swing()).foot;
@@ -662,11 +812,13 @@ impl HzdProblem {
                 let (qn, dqn) = (&z[..nq], &z[nq..2 * nq]);
                 let (q0, dq0) = (&z[2 * nq..3 * nq], &z[3 * nq..4 * nq]);
                 let zero = vec![S::zero(); nq];
-                let [q, dq, _] = bp.full_state(qn, dqn, &zero).map_err(|_| DomainError)?;
+                let [q, dq, _] = bp
+                    .full_state_design(qn, dqn, &zero, design)
+                    .map_err(|_| DomainError)?;
                 let swing_foot = bp.legs.side(bp.swing()).foot;
                 let imp = bp
                     .model
-                    .impact(&q, &dq, swing_foot)
+                    .impact_with(&self.inertias_of(kind, z), &q, &dq, swing_foot)
                     .map_err(|_| DomainError)?;
                 let dq_plus: Vec<S> = imp.dq_plus.iter().copied().collect();
                 for i in 0..nq {
@@ -797,6 +949,12 @@ impl HzdProblem {
         hi[l.duration()] = g.step_duration_s[1];
         lo[l.length()] = g.step_length_m[0];
         hi[l.length()] = g.step_length_m[1];
+        if let Some(d) = &self.design {
+            for i in 0..2 {
+                lo[l.design_var(i)] = d.spec.bounds_m[i][0];
+                hi[l.design_var(i)] = d.spec.bounds_m[i][1];
+            }
+        }
         (lo, hi)
     }
 

@@ -76,6 +76,51 @@ pub struct PlannerConfig {
     pub cost: CostConfig,
     /// Solver.
     pub solver: SolverConfig,
+    /// Co-design of the thigh and shin lengths (`adam codesign`).
+    #[serde(default)]
+    pub codesign: CodesignConfig,
+}
+
+/// The co-design's settings (paper Sec. III–IV).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CodesignConfig {
+    /// Initial thigh and shin length, m.
+    pub initial_m: [f64; 2],
+    /// Bounds on the thigh length, m (paper Table I).
+    pub thigh_m: [f64; 2],
+    /// Bounds on the shin length, m (paper Table I).
+    pub shin_m: [f64; 2],
+    /// Link inertias as differentiated polynomials of the lengths inside the NLP (`exact`), or
+    /// frozen per solve and regenerated between solves (`alg1`, the paper's Alg. 1).
+    pub inertia: InertiaCoupling,
+    /// Alg. 1 stops when no length moved more than this between outer iterations, m (δ).
+    pub tolerance_m: f64,
+    /// Alg. 1 outer iterations at most.
+    pub max_outer_iterations: usize,
+}
+
+/// How link inertias follow the design in the co-design.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum InertiaCoupling {
+    /// Inside the NLP, exact derivatives: one self-consistent solve.
+    Exact,
+    /// The paper's Alg. 1: frozen per solve, regenerated with GenerateModel(q_D) between solves.
+    Alg1,
+}
+
+impl Default for CodesignConfig {
+    fn default() -> Self {
+        Self {
+            initial_m: [0.24, 0.25],
+            thigh_m: [0.15, 0.35],
+            shin_m: [0.15, 0.35],
+            inertia: InertiaCoupling::Exact,
+            tolerance_m: 1e-3,
+            max_outer_iterations: 10,
+        }
+    }
 }
 
 impl Default for PlannerConfig {
@@ -105,6 +150,7 @@ impl Default for PlannerConfig {
                 tolerance: 1e-6,
                 max_iterations: 500,
             },
+            codesign: CodesignConfig::default(),
         }
     }
 }
@@ -202,6 +248,43 @@ impl PlannerConfig {
             nonneg(&format!("cost.weights[{i}]"), *w)?;
         }
         positive("solver.tolerance", self.solver.tolerance)?;
+        let c = &self.codesign;
+        let (lo, hi) = (model::design::DESIGN_MIN_M, model::design::DESIGN_MAX_M);
+        for (name, [a, b]) in [
+            ("codesign.thigh_m", c.thigh_m),
+            ("codesign.shin_m", c.shin_m),
+        ] {
+            if !(a.is_finite() && b.is_finite() && lo <= a && a < b && b <= hi) {
+                return Err(bad(
+                    name,
+                    format!("[{a}, {b}]"),
+                    &format!(
+                        "must be an increasing range inside [{lo}, {hi}] m (the inertia fits)"
+                    ),
+                ));
+            }
+        }
+        for (i, (name, [a, b])) in [("thigh", c.thigh_m), ("shin", c.shin_m)]
+            .iter()
+            .enumerate()
+        {
+            let v = c.initial_m[i];
+            if !(v.is_finite() && *a <= v && v <= *b) {
+                return Err(bad(
+                    &format!("codesign.initial_m[{i}]"),
+                    v.to_string(),
+                    &format!("the initial {name} length must lie in its bounds [{a}, {b}] m"),
+                ));
+            }
+        }
+        positive("codesign.tolerance_m", c.tolerance_m)?;
+        if c.max_outer_iterations == 0 {
+            return Err(bad(
+                "codesign.max_outer_iterations",
+                "0".into(),
+                "must be at least 1",
+            ));
+        }
         if self.solver.max_iterations == 0 {
             return Err(bad(
                 "solver.max_iterations",

@@ -26,6 +26,7 @@
 //! ```
 
 pub mod biped;
+pub mod codesign;
 pub mod collocation;
 pub mod config;
 mod error;

@@ -5,15 +5,15 @@
 //! probe seed, so the same model and config give the same gait bit for bit.
 
 use crate::biped::PlanarBiped;
-use crate::collocation::HzdProblem;
+use crate::collocation::{HzdProblem, TORQUE_SCALE};
 use crate::config::PlannerConfig;
 use crate::guess::initial_guess;
 use crate::nlp::{self, IterationControl, IterationReport, SolveOptions};
 use crate::{PlannerError, Result};
 use model::design::DesignLengths;
 use model::gait::{
-    sha256_hex, BezierSpec, GaitFile, PhaseDefinition, RobotReference, RobotState, SolverSummary,
-    GAIT_SCHEMA_VERSION,
+    sha256_hex, BezierSpec, FeedforwardTable, GaitFile, PhaseDefinition, RobotReference,
+    RobotState, SolverSummary, GAIT_SCHEMA_VERSION,
 };
 use model::PlanarModel;
 use std::time::Instant;
@@ -65,6 +65,9 @@ pub enum Progress<'a> {
 
 const FEASIBILITY: &str = "feasibility";
 
+/// Iterations allowed to one start of the feasibility solve before the next start is tried.
+pub const FEASIBILITY_MAX_ITERATIONS: usize = 150;
+
 /// The cost-of-transport solve alone, from a feasible point (for warm re-plans and tests).
 pub fn solve_cost_stage(
     model: &PlanarModel,
@@ -76,7 +79,7 @@ pub fn solve_cost_stage(
     Ok(solve_stage(&costed, "cost of transport", config, &mut |_| {})?.0)
 }
 
-fn solve_stage(
+pub(crate) fn solve_stage(
     problem: &HzdProblem,
     stage: &'static str,
     config: &PlannerConfig,
@@ -136,19 +139,65 @@ pub fn plan_gait(
         config.gait.step_length_m[0],
         0.25_f64.max(config.gait.step_length_m[0]),
     );
-    let duration0 = 0.5 * (config.gait.step_duration_s[0] + config.gait.step_duration_s[1]);
+    let [s_lo, s_hi] = config.gait.step_length_m;
+    let [d_lo, d_hi] = config.gait.step_duration_s;
     let probe = HzdProblem::new(biped.clone(), config.clone(), Vec::new(), false)?;
-    let guess = initial_guess(&biped, &probe.layout, step0, duration0)?;
-    let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
     let setup_time_s = setup.elapsed().as_secs_f64();
     let size = (
-        nlp::NlpProblem::num_variables(&feasibility),
-        nlp::NlpProblem::num_constraints(&feasibility),
+        nlp::NlpProblem::num_variables(&probe),
+        nlp::NlpProblem::num_constraints(&probe),
     );
-    let (x1, r1) = solve_stage(&feasibility, FEASIBILITY, config, on_progress)?;
+    // The feasibility solve is sensitive to its start: from some hand-built steps the interior
+    // point drifts into a long restoration phase (the default ADAM problem from 0.25 m / 0.75 s
+    // took 67 iterations and 106 s; from 0.25 m / 0.65 s, 43 iterations and 2.3 s). So a fixed,
+    // deterministic list of starts is tried in order, each capped at FEASIBILITY_MAX_ITERATIONS.
+    let starts = [
+        (step0, d_lo + (d_hi - d_lo) / 6.0),
+        ((step0 + 0.05).min(s_hi), d_lo + (d_hi - d_lo) / 3.0),
+        (s_lo, d_hi),
+        ((step0 - 0.05).max(s_lo), d_lo + 2.0 * (d_hi - d_lo) / 3.0),
+        (step0, 0.5 * (d_lo + d_hi)),
+    ];
+    let mut capped = config.clone();
+    capped.solver.max_iterations = config.solver.max_iterations.min(FEASIBILITY_MAX_ITERATIONS);
+    let mut spent = (0, 0.0, 0.0);
+    let mut found = None;
+    let mut last_error = None;
+    for &(step, duration) in &starts {
+        let guess = initial_guess(&biped, &probe.layout, step, duration)?;
+        let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
+        let attempt = Instant::now();
+        match solve_stage(&feasibility, FEASIBILITY, &capped, on_progress) {
+            Ok((x, mut report)) => {
+                report.iterations += spent.0;
+                report.solve_time_s += spent.1;
+                report.evaluation_time_s += spent.2;
+                found = Some((x, report));
+                break;
+            }
+            Err(e) => {
+                // Count the attempt honestly in the stage's figures.
+                if let PlannerError::NotSolved { iterations, .. } = &e {
+                    spent.0 += iterations;
+                }
+                spent.1 += attempt.elapsed().as_secs_f64();
+                last_error = Some(e);
+            }
+        }
+    }
+    let Some((x1, r1)) = found else {
+        return Err(last_error.unwrap_or_else(|| PlannerError::Solver("no start".into())));
+    };
     let costed = HzdProblem::new(biped, config.clone(), x1.clone(), true)?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
-    let gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
+    let mut gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
+    // The runtime's feed-forward: the torques along the closed-loop orbit (finer and more
+    // faithful than the collocation points' torques that gait_from_solution records).
+    gait.feedforward = Some(crate::verify::feedforward_from_orbit(
+        model,
+        &gait,
+        crate::verify::VerifyOptions::default(),
+    )?);
     Ok(PlannedGait {
         gait,
         stages: vec![r1, r2],
@@ -157,6 +206,37 @@ pub fn plan_gait(
         size,
         setup_time_s,
     })
+}
+
+/// The planned torque of each output's joint at every collocation point, by phase: the
+/// runtime's feed-forward term. Points whose phase does not increase (never at an optimum) are
+/// skipped so the table stays strictly increasing.
+pub fn feedforward_table(problem: &HzdProblem, x: &[f64]) -> FeedforwardTable {
+    let l = &problem.layout;
+    let bp = &problem.biped;
+    let mut table = FeedforwardTable {
+        phase: Vec::with_capacity(l.points()),
+        torque_nm: Vec::with_capacity(l.points()),
+    };
+    for k in 0..l.points() {
+        let tau = x[l.tau(k)];
+        if table.phase.last().is_some_and(|t| tau <= *t) {
+            continue;
+        }
+        let row = bp
+            .output_coords
+            .iter()
+            .map(|&c| {
+                bp.actuators
+                    .iter()
+                    .position(|&a| a == c)
+                    .map_or(0.0, |i| TORQUE_SCALE * x[l.u(k) + i])
+            })
+            .collect();
+        table.phase.push(tau);
+        table.torque_nm.push(row);
+    }
+    table
 }
 
 /// The gait file for the NLP point `x`.
@@ -204,6 +284,7 @@ pub fn gait_from_solution(
         speed_mps: length / duration,
         cost_of_transport: problem.cost_of_transport(x),
         initial_state: Some(RobotState { q, dq }),
+        feedforward: Some(feedforward_table(problem, x)),
         solver: SolverSummary {
             solver: "ripopt 0.8 interior point via planner::nlp".into(),
             status: stages.last().map(|s| s.status.clone()).unwrap_or_default(),

@@ -121,6 +121,29 @@ impl fmt::Display for VerifyReport {
     }
 }
 
+/// The feedback law that enforces the virtual constraints in the closed loop.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum Law {
+    /// The paper's input–output linearizing controller with ε of [`VerifyOptions`].
+    #[default]
+    IoLinearizing,
+    /// What the runtime does: per-joint PD on each output with an optional feed-forward torque
+    /// by phase, u_o = −kp y_o − kd ẏ_o + u_ff,o(τ).
+    JointPd {
+        /// Proportional gain, N·m/rad.
+        kp_nm_per_rad: f64,
+        /// Derivative gain, N·m·s/rad.
+        kd_nm_s_per_rad: f64,
+        /// Feed-forward torque per output (columns) at increasing phases τ, interpolated
+        /// linearly and held outside; empty: none.
+        feedforward: Vec<(f64, Vec<f64>)>,
+        /// Age of the references when they act, s: y^d, ẏ^d and the feed-forward are taken at
+        /// τ − τ̇·delay (first order), as on a bus that applies a command some milliseconds
+        /// after the sample it was computed from. 0: none.
+        reference_delay_s: f64,
+    },
+}
+
 /// The closed-loop hybrid system of one gait.
 pub struct ClosedLoop {
     /// The robot in pinned-stance coordinates.
@@ -129,6 +152,7 @@ pub struct ClosedLoop {
     theta_plus: f64,
     theta_minus: f64,
     options: VerifyOptions,
+    law: Law,
 }
 
 /// One simulated step.
@@ -166,7 +190,65 @@ impl ClosedLoop {
             theta_plus: theta_plus_rad,
             theta_minus: theta_minus_rad,
             options,
+            law: Law::IoLinearizing,
         })
+    }
+
+    /// The same closed loop under another feedback law.
+    pub fn with_law(mut self, law: Law) -> Self {
+        self.law = law;
+        self
+    }
+
+    /// Phase τ of a full configuration.
+    fn phase(&self, qr: &[f64], dqr: &[f64]) -> Result<(f64, f64)> {
+        let bp = &self.biped;
+        let nq = self.nq();
+        let [q, dq, ddq] = bp.full_state(qr, dqr, &vec![0.0; nq])?;
+        let th = bp
+            .model
+            .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)?;
+        let span = self.theta_minus - self.theta_plus;
+        Ok(((th.theta - self.theta_plus) / span, th.rate / span))
+    }
+
+    /// The torque of the current law, per output, along one step from `x0`: (τ, u) at every
+    /// integration step, for a feed-forward table.
+    pub fn torque_profile(&self, x0: &[f64]) -> Result<Vec<(f64, Vec<f64>)>> {
+        let nq = self.nq();
+        let dt = self.options.dt_s;
+        let mut x = x0.to_vec();
+        let mut table = Vec::new();
+        let mut t = 0.0;
+        while t < 5.0 {
+            let (_, u) = self.field(&x)?;
+            let (tau, _) = self.phase(&x[..nq], &x[nq..])?;
+            let by_output: Vec<f64> = self
+                .biped
+                .output_coords
+                .iter()
+                .map(|&c| {
+                    self.biped
+                        .actuators
+                        .iter()
+                        .position(|&a| a == c)
+                        .map_or(0.0, |k| u[k])
+                })
+                .collect();
+            if table
+                .last()
+                .is_none_or(|(t0, _): &(f64, Vec<f64>)| tau > *t0)
+            {
+                table.push((tau, by_output));
+            }
+            let next = self.rk4(&x, dt)?;
+            if t > 0.1 && self.swing_foot(&next)?[1] < 0.0 {
+                break;
+            }
+            x = next;
+            t += dt;
+        }
+        Ok(table)
     }
 
     fn nq(&self) -> usize {
@@ -214,6 +296,39 @@ impl ClosedLoop {
         let nu = self.biped.nu();
         let (qr, dqr) = (&x[..nq], &x[nq..]);
         let [q, dq, _] = self.biped.full_state(qr, dqr, &vec![0.0; nq])?;
+        if let Law::JointPd {
+            kp_nm_per_rad,
+            kd_nm_s_per_rad,
+            feedforward,
+            reference_delay_s,
+        } = &self.law
+        {
+            let (mut y, mut dy, _) = self.outputs(qr, dqr, &vec![0.0; nq])?;
+            let (mut tau, tau_rate) = self.phase(qr, dqr)?;
+            if *reference_delay_s > 0.0 {
+                tau -= tau_rate * reference_delay_s;
+                for (o, (yo, dyo)) in y.iter_mut().zip(dy.iter_mut()).enumerate() {
+                    let (b0, b1, _) = bezier::eval_all(&self.alpha[o], tau);
+                    let j = self.biped.output_coords[o];
+                    *yo = qr[j] - b0;
+                    *dyo = dqr[j] - b1 * tau_rate;
+                }
+            }
+            let mut ff = vec![0.0; y.len()];
+            let knots: Vec<f64> = feedforward.iter().map(|(t, _)| *t).collect();
+            let rows: Vec<&[f64]> = feedforward.iter().map(|(_, u)| u.as_slice()).collect();
+            model::gait::interpolate(&knots, &rows, tau, &mut ff);
+            let mut u = vec![0.0; nu];
+            for (k, &a) in self.biped.actuators.iter().enumerate() {
+                if let Some(o) = self.biped.output_coords.iter().position(|&c| c == a) {
+                    u[k] = -kp_nm_per_rad * y[o] - kd_nm_s_per_rad * dy[o] + ff[o];
+                }
+            }
+            let ddq = self.accelerations(&q, &dq, &u)?;
+            let mut f = dqr.to_vec();
+            f.extend(ddq);
+            return Ok((f, u));
+        }
         let zero_u = vec![0.0; nu];
         let a0 = self.accelerations(&q, &dq, &zero_u)?;
         let (y, dy, ddy0) = self.outputs(qr, dqr, &a0)?;
@@ -336,13 +451,70 @@ impl ClosedLoop {
     }
 }
 
+/// Samples kept in a feed-forward table made by [`feedforward_from_orbit`].
+pub const FEEDFORWARD_SAMPLES: usize = 101;
+
+/// The feed-forward table of a gait: the torque of each output's joint along one closed-loop
+/// step from the gait's planned post-impact state under the input–output linearizing
+/// controller, i.e. the torque that keeps the model on the planned orbit, resampled at
+/// [`FEEDFORWARD_SAMPLES`] evenly spaced phases. (The collocation torques at the 2N + 1 points,
+/// interpolated linearly, are too coarse: under joint PD the robot loses ~2 % of its speed per
+/// step with them; see the `shipped_gait_needs_its_feedforward_under_joint_pd` test.)
+pub fn feedforward_from_orbit(
+    model: &PlanarModel,
+    gait: &GaitFile,
+    options: VerifyOptions,
+) -> Result<model::gait::FeedforwardTable> {
+    let cl = ClosedLoop::new(model, gait, options)?;
+    let state = gait
+        .initial_state
+        .as_ref()
+        .ok_or_else(|| PlannerError::Robot {
+            robot: model.name.clone(),
+            reason: "the gait file has no initial_state to simulate the orbit from".into(),
+        })?;
+    let bp = &cl.biped;
+    let x0: Vec<f64> = bp
+        .reduced
+        .iter()
+        .map(|&c| state.q[c])
+        .chain(bp.reduced.iter().map(|&c| state.dq[c]))
+        .collect();
+    let profile = cl.torque_profile(&x0)?;
+    let knots: Vec<f64> = profile.iter().map(|(t, _)| *t).collect();
+    let rows: Vec<&[f64]> = profile.iter().map(|(_, u)| u.as_slice()).collect();
+    let m = gait.outputs.len();
+    let mut table = model::gait::FeedforwardTable {
+        phase: Vec::with_capacity(FEEDFORWARD_SAMPLES),
+        torque_nm: Vec::with_capacity(FEEDFORWARD_SAMPLES),
+    };
+    for i in 0..FEEDFORWARD_SAMPLES {
+        let tau = i as f64 / (FEEDFORWARD_SAMPLES - 1) as f64;
+        let mut row = vec![0.0; m];
+        model::gait::interpolate(&knots, &rows, tau, &mut row);
+        table.phase.push(tau);
+        table.torque_nm.push(row);
+    }
+    Ok(table)
+}
+
 /// Verifies `gait` on `model`: fixed point, eigenvalues, consistency with the plan.
 pub fn verify_gait(
     model: &PlanarModel,
     gait: &GaitFile,
     options: VerifyOptions,
 ) -> Result<VerifyReport> {
-    let cl = ClosedLoop::new(model, gait, options)?;
+    verify_gait_with(model, gait, options, Law::IoLinearizing)
+}
+
+/// [`verify_gait`] under another feedback law (e.g. the runtime's joint PD).
+pub fn verify_gait_with(
+    model: &PlanarModel,
+    gait: &GaitFile,
+    options: VerifyOptions,
+    law: Law,
+) -> Result<VerifyReport> {
+    let cl = ClosedLoop::new(model, gait, options)?.with_law(law);
     let bp = &cl.biped;
     let nq = bp.nq();
     let state = gait

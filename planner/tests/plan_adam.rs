@@ -88,7 +88,7 @@ fn plans_a_feasible_gait_inside_table_one_deterministically() {
 /// Any planar point-foot biped that follows the naming convention plans: a five-link walker
 /// with different masses, lengths and actuators.
 #[test]
-fn plans_a_second_different_five_link_walker() {
+fn plans_and_verifies_a_second_different_five_link_walker() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../configs/robots/five_link_walker.urdf"
@@ -122,4 +122,9 @@ fn plans_a_second_different_five_link_walker() {
         g.step_length_m, g.step_duration_s, g.cost_of_transport
     );
     assert!(g.step_length_m >= 0.2 - 1e-6 && g.step_length_m <= 0.5 + 1e-6);
+    // Verified independently of the optimizer, like ADAM's: a stable periodic orbit, the planned one.
+    let report = planner::verify::verify_gait(&model, g, planner::verify::VerifyOptions::default())
+        .expect("verifies");
+    println!("{report}");
+    assert!(report.passed(1e-6), "{report}");
 }

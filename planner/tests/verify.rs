@@ -1,7 +1,9 @@
 //! Independent verification of gaits: the shipped gait is a stable periodic orbit; a broken gait
 //! is rejected; impacts are located on the guard.
 
-use planner::verify::{load_gait_and_robot, verify_gait, ClosedLoop, VerifyOptions};
+use planner::verify::{
+    load_gait_and_robot, verify_gait, verify_gait_with, ClosedLoop, Law, VerifyOptions,
+};
 use std::path::Path;
 
 const GAIT: &str = concat!(
@@ -88,5 +90,104 @@ fn a_gait_with_a_changed_robot_or_broken_outputs_is_rejected() {
     assert!(
         !verdict.is_ok_and(|r| r.passed(1e-6)),
         "a shifted swing-hip trajectory must not verify"
+    );
+}
+
+/// The runtime drives the outputs with joint PD, not the paper's input–output linearization:
+/// with the plan's torques as feed-forward the gait stays a stable periodic orbit under the
+/// runtime's default gains, and without them the robot loses speed every step and stops.
+#[test]
+fn shipped_gait_needs_its_feedforward_under_joint_pd() {
+    let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
+    let ff = gait
+        .feedforward
+        .as_ref()
+        .expect("the shipped gait has a feed-forward table");
+    let table: Vec<(f64, Vec<f64>)> = ff
+        .phase
+        .iter()
+        .copied()
+        .zip(ff.torque_nm.iter().cloned())
+        .collect();
+    let pd = |feedforward| Law::JointPd {
+        kp_nm_per_rad: 300.0,
+        kd_nm_s_per_rad: 6.0,
+        feedforward,
+        reference_delay_s: 0.0,
+    };
+    let options = VerifyOptions::default();
+    let report = verify_gait_with(&model, &gait, options, pd(table)).expect("PD closed loop");
+    println!("joint PD 300/6 + planned feed-forward:\n{report}");
+    assert!(report.passed(options.fixed_point_tolerance), "{report}");
+    // Without feed-forward there is no periodic orbit near the plan.
+    match verify_gait_with(&model, &gait, options, pd(Vec::new())) {
+        Ok(r) => assert!(!r.passed(options.fixed_point_tolerance), "{r}"),
+        Err(e) => println!("PD only: {e}"),
+    }
+}
+
+/// Why the runtime needs latency compensation: on the exact model under the runtime's PD
+/// (150/3 N·m/rad, N·m·s/rad) with the planned feed-forward, references acting 1 ms late make
+/// the robot walk a different, much faster orbit (shorter steps in time, same length).
+#[test]
+fn late_references_speed_the_gait_up() {
+    let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
+    let ff = gait.feedforward.as_ref().expect("feed-forward table");
+    let table: Vec<(f64, Vec<f64>)> = ff
+        .phase
+        .iter()
+        .copied()
+        .zip(ff.torque_nm.iter().cloned())
+        .collect();
+    let state = gait.initial_state.as_ref().expect("initial state");
+    let steady_duration = |delay: f64| -> f64 {
+        let law = Law::JointPd {
+            kp_nm_per_rad: 150.0,
+            kd_nm_s_per_rad: 3.0,
+            feedforward: table.clone(),
+            reference_delay_s: delay,
+        };
+        let cl = ClosedLoop::new(&model, &gait, VerifyOptions::default())
+            .expect("closed loop")
+            .with_law(law);
+        let bp = &cl.biped;
+        let mut x: Vec<f64> = bp
+            .reduced
+            .iter()
+            .map(|&c| state.q[c])
+            .chain(bp.reduced.iter().map(|&c| state.dq[c]))
+            .collect();
+        let mut last = f64::NAN;
+        for _ in 0..10 {
+            let step = cl.step(&x).expect("the robot keeps stepping");
+            last = step.duration_s;
+            x = step.next.as_slice().to_vec();
+        }
+        last
+    };
+    let (on_time, late) = (steady_duration(0.0), steady_duration(0.001));
+    println!("10th step: {on_time:.3} s with on-time references, {late:.3} s with 1 ms late ones");
+    assert!((on_time - gait.step_duration_s).abs() < 0.1, "{on_time}");
+    assert!(late < 0.8 * on_time, "{late} vs {on_time}");
+}
+
+/// The co-designed ADAM shipped in configs/ (`adam codesign`): its gait is a stable orbit on its
+/// URDF, and that URDF is exactly GenerateModel's at the gait's design lengths.
+#[test]
+fn shipped_codesigned_gait_is_stable_on_its_generated_urdf() {
+    let path = Path::new(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/gaits/adam_codesign.json"
+    ));
+    let (gait, model) = load_gait_and_robot(path).expect("co-designed gait and URDF load");
+    let report = verify_gait(&model, &gait, VerifyOptions::default()).expect("verifies");
+    println!("{report}");
+    assert!(report.passed(1e-6), "{report}");
+    let urdf = std::fs::read_to_string(path.parent().expect("folder").join(&gait.robot.urdf))
+        .expect("URDF");
+    let regenerated = model::design::generate_urdf(&gait.design).expect("generates");
+    assert_eq!(
+        urdf, regenerated,
+        "the URDF is GenerateModel's at the gait's lengths"
     );
 }

@@ -90,8 +90,17 @@ pub struct GainsConfig {
     /// Constant feed-forward torque per output (stance hip, stance knee, swing hip, swing
     /// knee) while walking, N·m.
     pub walk_feedforward_nm: [f64; LEG_SLOTS],
+    /// Weight of the gait's planned torques (the gait file's `feedforward` table, by phase)
+    /// added to the PD commands while walking: 1 = the plan's torques, 0 = PD only. Without
+    /// them the PD alone lets the robot lose speed every step (`adam gait check --pd`).
+    #[serde(default = "default_plan_feedforward_scale")]
+    pub plan_feedforward_scale: f64,
     /// Damping gain in the Idle and Damping states, N·m·s/rad.
     pub damping_kd_nm_s_per_rad: f64,
+}
+
+fn default_plan_feedforward_scale() -> f64 {
+    1.0
 }
 
 /// Idle → Ramp → Stand: the move from the measured pose to the gait's first pose.
@@ -114,10 +123,38 @@ pub struct WalkConfig {
     pub switch_min_phase: f64,
     /// Swing foot height above the stance foot below which the foot counts as down, m.
     pub touchdown_height_m: f64,
+    /// Fastest descent of the swing foot (measured by kinematics) that still counts as "down",
+    /// m/s: the foot has landed when it is near the ground and has stopped descending.
+    #[serde(default = "default_touchdown_max_descent_mps")]
+    pub touchdown_max_descent_mps: f64,
+    /// A swing foot this far *below* the stance foot has landed even if it still "descends":
+    /// after the impact the old stance foot lifts off, m.
+    #[serde(default = "default_touchdown_below_m")]
+    pub touchdown_below_m: f64,
+    /// An accelerometer sample whose norm differs from g by at least this is the impact of
+    /// the swing foot (near the ground, late in the step): switch at once, m/s².
+    #[serde(default = "default_touchdown_impact_accel_mps2")]
+    pub touchdown_impact_accel_mps2: f64,
+    /// τ from which an impact spike (with the swing foot near the ground) switches the stance
+    /// leg: a foot that lands a little early must not be ignored.
+    #[serde(default = "default_impact_min_phase")]
+    pub impact_min_phase: f64,
+    /// Latency compensation, s: y^d, ẏ^d and the feed-forward are evaluated at τ + τ̇·lead
+    /// (for τ̇ > 0), since a command acts some milliseconds after the sample it was computed
+    /// from. The gait is very sensitive to this delay: on the exact model, references 1 ms late
+    /// shorten the steady step from 0.96 s to 0.73 s (README).
+    #[serde(default)]
+    pub reference_lead_s: f64,
     /// Consecutive ticks the touchdown condition must hold.
     pub touchdown_debounce_ticks: u32,
     /// Largest |τ̇| used for ẏ^d, 1/s (guards the velocity reference against gyro spikes).
     pub max_phase_rate_per_s: f64,
+    /// Bandwidth of the phase observer, Hz (0: use the measured τ and τ̇ directly). A
+    /// critically damped second-order observer tracks the state-based τ (ramps without lag)
+    /// but not the torso's fast pitch wobble, which would otherwise feed back through y^d(τ)
+    /// into the swing leg and the torso again (runtime::controller docs).
+    #[serde(default)]
+    pub phase_observer_hz: f64,
 }
 
 /// Torso pitch estimator (see [`crate::estimator`]).
@@ -132,6 +169,40 @@ pub struct EstimatorConfig {
     pub accel_pitch_noise_rad: f64,
     /// Skip the accelerometer update when | ‖a‖ − g | exceeds this, m/s².
     pub accel_gate_mps2: f64,
+    /// Use the accelerometer while walking too. Off by default: the torso's own
+    /// accelerations within a step tilt the measured gravity by tenths of a radian, and through
+    /// the bias covariance they drag the bias estimate off; walking uses the gyro and the
+    /// kinematic pitch of each touchdown instead.
+    #[serde(default)]
+    pub accel_while_walking: bool,
+    /// Standard deviation of the kinematic pitch measured at each touchdown (both feet on
+    /// flat ground), rad.
+    #[serde(default = "default_touchdown_pitch_sigma_rad")]
+    pub touchdown_pitch_sigma_rad: f64,
+}
+
+fn default_max_implausible_imu_samples() -> u32 {
+    5
+}
+
+fn default_impact_min_phase() -> f64 {
+    0.8
+}
+
+fn default_touchdown_impact_accel_mps2() -> f64 {
+    15.0
+}
+
+fn default_touchdown_below_m() -> f64 {
+    0.003
+}
+
+fn default_touchdown_max_descent_mps() -> f64 {
+    0.03
+}
+
+fn default_touchdown_pitch_sigma_rad() -> f64 {
+    0.01
 }
 
 /// Safety limits (see [`crate::safety`]).
@@ -158,6 +229,10 @@ pub struct SafetyConfig {
     pub max_gyro_rad_s: f64,
     /// Plausible accelerometer norm range, m/s².
     pub accel_norm_range_mps2: [f64; 2],
+    /// Consecutive implausible IMU samples that trip (an impact spikes the accelerometer for a
+    /// sample or two).
+    #[serde(default = "default_max_implausible_imu_samples")]
+    pub max_implausible_imu_samples: u32,
 }
 
 /// MCAP logging and zero-copy telemetry.
@@ -411,13 +486,40 @@ impl RuntimeConfig {
                 g.walk_feedforward_nm[k],
             )?;
         }
+        non_negative("gains.plan_feedforward_scale", g.plan_feedforward_scale)?;
+        if g.plan_feedforward_scale > 2.0 {
+            return Err(bad(
+                "gains.plan_feedforward_scale",
+                g.plan_feedforward_scale.to_string(),
+                "must be in [0, 2] (1 = the planned torques)",
+            ));
+        }
         non_negative("gains.damping_kd_nm_s_per_rad", g.damping_kd_nm_s_per_rad)?;
         non_negative("ramp.min_duration_s", self.ramp.min_duration_s)?;
         positive("ramp.max_speed_rad_s", self.ramp.max_speed_rad_s)?;
         let w = &self.walk;
         positive("walk.switch_min_phase", w.switch_min_phase)?;
         non_negative("walk.touchdown_height_m", w.touchdown_height_m)?;
+        non_negative("walk.touchdown_below_m", w.touchdown_below_m)?;
+        non_negative("walk.impact_min_phase", w.impact_min_phase)?;
+        non_negative("walk.reference_lead_s", w.reference_lead_s)?;
+        if w.reference_lead_s > 0.02 {
+            return Err(bad(
+                "walk.reference_lead_s",
+                w.reference_lead_s.to_string(),
+                "must be at most 0.02 s (a few control periods)",
+            ));
+        }
+        positive(
+            "walk.touchdown_impact_accel_mps2",
+            w.touchdown_impact_accel_mps2,
+        )?;
+        positive(
+            "walk.touchdown_max_descent_mps",
+            w.touchdown_max_descent_mps,
+        )?;
         positive("walk.max_phase_rate_per_s", w.max_phase_rate_per_s)?;
+        non_negative("walk.phase_observer_hz", w.phase_observer_hz)?;
         if w.touchdown_debounce_ticks == 0 {
             return Err(bad(
                 "walk.touchdown_debounce_ticks",
@@ -433,6 +535,10 @@ impl RuntimeConfig {
         )?;
         positive("estimator.accel_pitch_noise_rad", e.accel_pitch_noise_rad)?;
         positive("estimator.accel_gate_mps2", e.accel_gate_mps2)?;
+        positive(
+            "estimator.touchdown_pitch_sigma_rad",
+            e.touchdown_pitch_sigma_rad,
+        )?;
         let s = &self.safety;
         for k in 0..LEG_SLOTS {
             finite(

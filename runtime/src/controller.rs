@@ -26,7 +26,7 @@ use crate::io::ImuSample;
 use crate::safety::{SafetyInput, SafetyMonitor, Trip};
 use crate::{Result, RuntimeError};
 use model::bezier::{self, MAX_BEZIER_DEGREE};
-use model::gait::{GaitFile, PhaseDefinition};
+use model::gait::{GaitFile, PhaseDefinition, MAX_FEEDFORWARD_SAMPLES};
 use model::robot::{Legs, MAX_DOF};
 use model::{PlanarModel, Side};
 
@@ -325,6 +325,10 @@ struct GaitTable {
     first_stance: Side,
     /// Planned torso pitch and pitch rate at the start of the step (from `initial_state`).
     initial_pitch: Option<(f64, f64)>,
+    /// The gait's feed-forward table: phases and torques per output (first `ff_len` rows).
+    ff_phase: [f64; MAX_FEEDFORWARD_SAMPLES],
+    ff_torque_nm: [[f64; OUTPUTS]; MAX_FEEDFORWARD_SAMPLES],
+    ff_len: usize,
 }
 
 fn side_index(s: Side) -> usize {
@@ -378,7 +382,26 @@ impl GaitTable {
             alpha[i][..row.len()].copy_from_slice(row);
         }
         let _ = (model, legs);
+        let mut ff_phase = [0.0; MAX_FEEDFORWARD_SAMPLES];
+        let mut ff_torque_nm = [[0.0; OUTPUTS]; MAX_FEEDFORWARD_SAMPLES];
+        let mut ff_len = 0;
+        if let Some(ff) = &gait.feedforward {
+            // GaitFile::validate bounds the table to MAX_FEEDFORWARD_SAMPLES rows of OUTPUTS.
+            for (k, (t, row)) in ff.phase.iter().zip(&ff.torque_nm).enumerate() {
+                if k >= MAX_FEEDFORWARD_SAMPLES || row.len() != OUTPUTS {
+                    return Err(RuntimeError::Gait {
+                        reason: format!("feedforward.torque_nm[{k}] has the wrong shape"),
+                    });
+                }
+                ff_phase[k] = *t;
+                ff_torque_nm[k].copy_from_slice(row);
+                ff_len = k + 1;
+            }
+        }
         Ok(Self {
+            ff_phase,
+            ff_torque_nm,
+            ff_len,
             alpha,
             alpha_len: gait.bezier.degree + 1,
             out_slot,
@@ -396,6 +419,14 @@ impl GaitTable {
     fn eval(&self, i: usize, s: f64) -> (f64, f64) {
         let a = &self.alpha[i][..self.alpha_len];
         (bezier::eval(a, s), bezier::eval_d1(a, s))
+    }
+
+    /// The planned torque of each output at phase `s`, N·m (zeros without a table).
+    fn feedforward(&self, s: f64) -> [f64; OUTPUTS] {
+        let mut out = [0.0; OUTPUTS];
+        let n = self.ff_len;
+        model::gait::interpolate(&self.ff_phase[..n], &self.ff_torque_nm[..n], s, &mut out);
+        out
     }
 }
 
@@ -438,14 +469,23 @@ pub struct Controller {
     kp: [f64; LEG_SLOTS],
     kd: [f64; LEG_SLOTS],
     feedforward_nm: [f64; OUTPUTS],
+    plan_feedforward_scale: f64,
     damping_kd: f64,
     ramp_min_duration_s: f64,
     ramp_max_speed_rad_s: f64,
     switch_min_phase: f64,
     touchdown_height_m: f64,
+    touchdown_max_descent_mps: f64,
+    touchdown_below_m: f64,
+    touchdown_impact_accel_mps2: f64,
+    impact_min_phase: f64,
+    reference_lead_s: f64,
     touchdown_debounce_ticks: u32,
     max_phase_rate_per_s: f64,
+    phase_observer_hz: f64,
     estimator: PitchEstimator,
+    accel_while_walking: bool,
+    touchdown_pitch_sigma_rad: f64,
     safety: SafetyMonitor,
     // Run-time state.
     state: ControlState,
@@ -453,6 +493,10 @@ pub struct Controller {
     steps: u32,
     step_start_t_s: f64,
     touchdown_ticks: u32,
+    /// (time, swing-foot height) at the previous walking tick.
+    last_foot: Option<(f64, f64)>,
+    /// Phase observer state: (τ̂, τ̂̇, time of the last update) once walking.
+    phase_hat: Option<(f64, f64, f64)>,
     ramp: Ramp,
     trip: Option<Trip>,
     motors: [MotorSample; SLOTS],
@@ -492,6 +536,15 @@ impl Controller {
                 reason: "walk.phase = state_based needs a state-based gait (θ⁺, θ⁻)".into(),
             });
         }
+        if config.gains.plan_feedforward_scale > 0.0 && gait_table.ff_len == 0 {
+            return Err(RuntimeError::Gait {
+                reason: format!(
+                    "gains.plan_feedforward_scale = {} but the gait file has no feedforward \
+                     table: re-plan it with `adam plan`, or set the scale to 0 (PD only)",
+                    config.gains.plan_feedforward_scale
+                ),
+            });
+        }
         let layout = SlotLayout::new(config, with_held);
         let zero_ramp = Ramp {
             start_t_s: 0.0,
@@ -510,14 +563,23 @@ impl Controller {
             kp: config.gains.kp_nm_per_rad,
             kd: config.gains.kd_nm_s_per_rad,
             feedforward_nm: config.gains.walk_feedforward_nm,
+            plan_feedforward_scale: config.gains.plan_feedforward_scale,
             damping_kd: config.gains.damping_kd_nm_s_per_rad,
             ramp_min_duration_s: config.ramp.min_duration_s,
             ramp_max_speed_rad_s: config.ramp.max_speed_rad_s,
             switch_min_phase: config.walk.switch_min_phase,
             touchdown_height_m: config.walk.touchdown_height_m,
+            touchdown_max_descent_mps: config.walk.touchdown_max_descent_mps,
+            touchdown_below_m: config.walk.touchdown_below_m,
+            touchdown_impact_accel_mps2: config.walk.touchdown_impact_accel_mps2,
+            impact_min_phase: config.walk.impact_min_phase,
+            reference_lead_s: config.walk.reference_lead_s,
             touchdown_debounce_ticks: config.walk.touchdown_debounce_ticks,
             max_phase_rate_per_s: config.walk.max_phase_rate_per_s,
+            phase_observer_hz: config.walk.phase_observer_hz,
             estimator: PitchEstimator::new(EstimatorParams::from(&config.estimator)),
+            accel_while_walking: config.estimator.accel_while_walking,
+            touchdown_pitch_sigma_rad: config.estimator.touchdown_pitch_sigma_rad,
             safety: SafetyMonitor::new(
                 config.safety.clone(),
                 config.loop_.max_overrun_streak,
@@ -528,6 +590,8 @@ impl Controller {
             steps: 0,
             step_start_t_s: 0.0,
             touchdown_ticks: 0,
+            last_foot: None,
+            phase_hat: None,
             ramp: zero_ramp,
             trip: None,
             motors: [MotorSample::default(); SLOTS],
@@ -572,6 +636,8 @@ impl Controller {
         self.stance = self.gait.first_stance;
         self.step_start_t_s = t_s;
         self.touchdown_ticks = 0;
+        self.last_foot = None;
+        self.phase_hat = None;
         self.steps = 0;
         self.enter(ControlState::Walk, status);
         true
@@ -683,10 +749,17 @@ impl Controller {
             leg_dq[k] = self.layout.direction[k] * self.motors[k].dq_rad_s;
         }
         // Estimator.
-        if let Some(imu) = &input.imu {
+        // An implausible sample (a glitch; safety counts them) is not integrated.
+        if let Some(imu) = input.imu.as_ref().filter(|i| self.safety.gyro_plausible(i)) {
             let dt = self.last_imu_t_s.map_or(0.0, |t0| imu.t_s - t0);
-            self.estimator
-                .update(imu.gyro_pitch_rad_s, imu.accel_x_mps2, imu.accel_z_mps2, dt);
+            let walking = matches!(self.state, ControlState::Walk | ControlState::Stop);
+            self.estimator.update_with(
+                imu.gyro_pitch_rad_s,
+                imu.accel_x_mps2,
+                imu.accel_z_mps2,
+                dt,
+                !walking || self.accel_while_walking,
+            );
             self.last_imu_t_s = Some(imu.t_s);
         }
         // Operator, then safety (a trip overrides any request).
@@ -747,21 +820,55 @@ impl Controller {
             }
             ControlState::Walk | ControlState::Stop => {
                 let mut eval = self.walk_references(t, &leg_q, &leg_dq);
-                if eval.touchdown {
+                self.observe_phase(t, &mut eval);
+                // The foot is down once it stops descending near the ground (a kinematic
+                // height alone would switch millimetres early, before the impact).
+                let descent_mps = match self.last_foot {
+                    Some((t0, h0)) if t > t0 => (h0 - eval.foot_height_m) / (t - t0),
+                    _ => f64::INFINITY,
+                };
+                self.last_foot = Some((t, eval.foot_height_m));
+                // The impact itself: a spike of the accelerometer (the IMU averages over its
+                // sample period, so the impulse shows in one sample).
+                let impact = input.imu.as_ref().is_some_and(|imu| {
+                    (imu.accel_x_mps2.hypot(imu.accel_z_mps2) - crate::estimator::GRAVITY_MPS2)
+                        .abs()
+                        >= self.touchdown_impact_accel_mps2
+                });
+                // The impact spike late in the step, with the swing foot near the ground, is the
+                // touchdown, even a little before τ = 1 (the feet are both down only then: the
+                // pitch that levels them is measured at this very sample).
+                let near = eval.foot_height_m <= self.touchdown_height_m;
+                let impact_switch = impact && near && eval.phase >= self.impact_min_phase;
+                // Without a spike: τ ≥ τ_switch and the foot stopped descending, or lies below
+                // the stance foot (the old stance foot lifting off after the impact), debounced.
+                let landed = descent_mps <= self.touchdown_max_descent_mps
+                    || eval.foot_height_m <= -self.touchdown_below_m;
+                if eval.touchdown && landed {
                     self.touchdown_ticks += 1;
                 } else {
                     self.touchdown_ticks = 0;
                 }
-                if self.touchdown_ticks >= self.touchdown_debounce_ticks {
+                if impact_switch || self.touchdown_ticks >= self.touchdown_debounce_ticks {
+                    if impact_switch {
+                        let pitch = self.touchdown_pitch_rad(&leg_q);
+                        self.estimator
+                            .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+                    }
                     // Impact: relabel the legs and start the next step.
                     self.stance = self.stance.other();
                     self.step_start_t_s = t;
                     self.touchdown_ticks = 0;
+                    self.last_foot = None;
                     self.steps = self.steps.saturating_add(1);
                     if self.state == ControlState::Stop {
                         self.enter(ControlState::Stand, status);
                     }
+                    // The new step starts at the measured phase, at the speed of the old one.
+                    let rate = self.phase_hat.map_or(0.0, |(_, r, _)| r);
                     eval = self.walk_references(t, &leg_q, &leg_dq);
+                    self.phase_hat = Some((eval.phase, rate, t));
+                    self.observe_phase(t, &mut eval);
                 }
                 (y_des, dy_des) = (eval.y, eval.dy);
                 (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
@@ -771,7 +878,12 @@ impl Controller {
                     let slot = self.gait.out_slot[stance][i];
                     let dir = self.layout.direction[slot];
                     let (q, dq, ff) = if walking {
-                        (y_des[i], dy_des[i], self.feedforward_nm[i])
+                        (
+                            y_des[i],
+                            dy_des[i],
+                            self.feedforward_nm[i]
+                                + self.plan_feedforward_scale * eval.feedforward_nm[i],
+                        )
                     } else {
                         (self.gait.eval(i, 0.0).0, 0.0, 0.0)
                     };
@@ -821,6 +933,119 @@ impl Controller {
             kp_nm_per_rad: kp,
             kd_nm_s_per_rad: kd,
             tau_ff_nm: tau_ff,
+        }
+    }
+
+    /// The phase observer: replaces the measured τ, τ̇ of `eval` by the observer's estimate
+    /// and recomputes the references from it (a no-op when `walk.phase_observer_hz` is 0).
+    ///
+    /// τ̂̇ = r̂ + 2ω(τ − τ̂), r̂̇ = ω²(τ − τ̂): critically damped at ω = 2π f, so a phase that
+    /// grows at a constant rate is tracked without lag, while pitch wobble faster than f is
+    /// filtered out of y^d(τ̂) and ẏ^d = y^d'(τ̂) r̂.
+    fn observe_phase(&mut self, t_s: f64, eval: &mut WalkEval) {
+        if self.phase_observer_hz <= 0.0 || !eval.phase.is_finite() {
+            return;
+        }
+        let w = 2.0 * std::f64::consts::PI * self.phase_observer_hz;
+        let (mut tau, mut rate) = match self.phase_hat {
+            Some((tau, rate, t0)) => {
+                let dt = (t_s - t0).clamp(0.0, 0.1);
+                // Semi-implicit Euler, substepped so ω·h stays ≤ 0.2 at any tick rate.
+                let n = ((w * dt / 0.2).ceil() as usize).clamp(1, 64);
+                let h = dt / n as f64;
+                let (mut tau, mut rate) = (tau, rate);
+                for _ in 0..n {
+                    let e = eval.phase - tau;
+                    rate += h * w * w * e;
+                    tau += h * (rate + 2.0 * w * e);
+                }
+                (tau, rate)
+            }
+            None => (eval.phase, eval.phase_rate),
+        };
+        rate = rate.clamp(-self.max_phase_rate_per_s, self.max_phase_rate_per_s);
+        if !tau.is_finite() || !rate.is_finite() {
+            (tau, rate) = (eval.phase, eval.phase_rate);
+        }
+        self.phase_hat = Some((tau, rate, t_s));
+        let measured_touchdown = eval.foot_height_m <= self.touchdown_height_m;
+        *eval = self.references(tau, rate, eval.foot_height_m);
+        eval.touchdown = tau >= self.switch_min_phase && measured_touchdown;
+    }
+
+    /// Height of the swing foot above the stance foot at torso pitch `pitch_rad`, m (NaN if the
+    /// kinematics fails, which fixed sizes rule out).
+    fn foot_height_at(&self, pitch_rad: f64, leg_q: &[f64; LEG_SLOTS]) -> f64 {
+        let mut q = self.q_template;
+        q[2] = pitch_rad;
+        for k in 0..LEG_SLOTS {
+            q[self.leg_coord[k]] = leg_q[k];
+        }
+        let swing = self.stance.other();
+        self.model
+            .body_poses(&q[..self.dof])
+            .map(|st| {
+                self.model
+                    .frame_position_in(&st, self.legs.side(swing).foot)[1]
+                    - self
+                        .model
+                        .frame_position_in(&st, self.legs.side(self.stance).foot)[1]
+            })
+            .unwrap_or(f64::NAN)
+    }
+
+    /// The torso pitch at which both feet are at the same height for these joint angles (both
+    /// on the flat ground at a touchdown), by Newton from the current estimate, rad (NaN if the
+    /// feet are too close together in x for the pitch to be observable).
+    fn touchdown_pitch_rad(&self, leg_q: &[f64; LEG_SLOTS]) -> f64 {
+        let mut pitch = self.estimator.pitch_rad();
+        for _ in 0..3 {
+            let h = self.foot_height_at(pitch, leg_q);
+            let eps = 1e-6;
+            let slope = (self.foot_height_at(pitch + eps, leg_q) - h) / eps;
+            // |dh/dθ| is the horizontal distance between the feet: ≥ 5 cm for a real step.
+            if slope.abs().partial_cmp(&0.05) != Some(std::cmp::Ordering::Greater) || !h.is_finite()
+            {
+                return f64::NAN;
+            }
+            pitch -= h / slope;
+        }
+        pitch
+    }
+
+    /// Desired outputs, their rates and the feed-forward at phase `phase` and rate `rate`.
+    fn references(&self, phase: f64, rate: f64, foot_height_m: f64) -> WalkEval {
+        let rate = rate.clamp(-self.max_phase_rate_per_s, self.max_phase_rate_per_s);
+        // Latency compensation: the command acts a few milliseconds after the sample it was
+        // computed from, so the references are taken that much further along the step.
+        let s = if phase.is_finite() {
+            let ahead = if rate > 0.0 {
+                phase + self.reference_lead_s * rate
+            } else {
+                phase
+            };
+            ahead.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let inside = (0.0..=1.0).contains(&phase);
+        let mut y = [0.0; OUTPUTS];
+        let mut dy = [0.0; OUTPUTS];
+        for i in 0..OUTPUTS {
+            let (v, d) = self.gait.eval(i, s);
+            y[i] = v;
+            // Outside [0, 1] the reference is held at its end value: no velocity.
+            dy[i] = if inside { d * rate } else { 0.0 };
+        }
+        let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
+        WalkEval {
+            feedforward_nm: self.gait.feedforward(s),
+            phase,
+            phase_rate: rate,
+            y,
+            dy,
+            foot_height_m,
+            touchdown,
         }
     }
 
@@ -876,35 +1101,14 @@ impl Controller {
                 1.0 / self.gait.step_duration_s,
             ),
         };
-        let rate = rate.clamp(-self.max_phase_rate_per_s, self.max_phase_rate_per_s);
-        let s = if phase.is_finite() {
-            phase.clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let inside = (0.0..=1.0).contains(&phase);
-        let mut y = [0.0; OUTPUTS];
-        let mut dy = [0.0; OUTPUTS];
-        for i in 0..OUTPUTS {
-            let (v, d) = self.gait.eval(i, s);
-            y[i] = v;
-            // Outside [0, 1] the reference is held at its end value: no velocity.
-            dy[i] = if inside { d * rate } else { 0.0 };
-        }
-        let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
-        WalkEval {
-            phase,
-            phase_rate: rate,
-            y,
-            dy,
-            foot_height_m,
-            touchdown,
-        }
+        self.references(phase, rate, foot_height_m)
     }
 }
 
 #[derive(Clone, Copy, Debug)]
 struct WalkEval {
+    /// The plan's torque per output at this phase, N·m.
+    feedforward_nm: [f64; OUTPUTS],
     phase: f64,
     phase_rate: f64,
     y: [f64; OUTPUTS],
@@ -1114,10 +1318,12 @@ mod tests {
             (tau - 0.3 / setup.gait.step_duration_s).abs() < 3e-3,
             "{tau}"
         );
+        // The references are taken τ̇·lead ahead (latency compensation).
+        let ahead = tau + setup.config.walk.reference_lead_s / setup.gait.step_duration_s;
         for i in 0..OUTPUTS {
             let a = &setup.gait.bezier.alpha[i];
-            assert!((s.y_des_rad[i] - bezier::eval(a, tau)).abs() < 1e-12);
-            let dy = bezier::eval_d1(a, tau) / setup.gait.step_duration_s;
+            assert!((s.y_des_rad[i] - bezier::eval(a, ahead)).abs() < 1e-12);
+            let dy = bezier::eval_d1(a, ahead) / setup.gait.step_duration_s;
             assert!((s.dy_des_rad_s[i] - dy).abs() < 1e-9);
         }
         // The gait's stance leg is right: stance hip is slot 2.
@@ -1247,13 +1453,19 @@ mod tests {
         assert!(matches!(t, Trip::ImuStale { .. }), "{t:?}");
         assert!((20..=22).contains(&n), "stale after 0.02 s: {n}");
 
+        // One implausible sample (an impact spike) does not trip; a run of them does.
         let mut h = standing();
-        let (t, n) = tripped(&mut h, 5, |h| {
+        let spike = |h: &mut Harness| {
             if let Some(imu) = h.input.imu.as_mut() {
                 imu.gyro_pitch_rad_s = 100.0;
             }
-        });
-        assert_eq!(n, 1);
+        };
+        for _ in 0..4 {
+            assert_eq!(h.step_with(None, spike).trip, None);
+        }
+        assert_eq!(h.step(None).trip, None, "a good sample resets the count");
+        let (t, n) = tripped(&mut h, 10, spike);
+        assert_eq!(n, 5, "the fifth implausible sample in a row trips: {t:?}");
         assert!(
             matches!(t, Trip::ImuImplausible { gyro_rad_s, accel_norm_mps2 } if gyro_rad_s == 100.0 && (accel_norm_mps2 - GRAVITY_MPS2).abs() < 1e-9),
             "{t:?}"

@@ -12,6 +12,13 @@
 //! θ_acc: at rest the accelerometer reads the specific force `[0, g]` (world x, z); in a torso at
 //! pitch θ that is `[−g sin θ, g cos θ]`.
 //!
+//! Walking adds a second measurement: at every touchdown both point feet are on the flat
+//! ground, so the pitch that puts them at the same height is measured from the joint encoders
+//! alone ([`PitchEstimator::measure_pitch`], called by the controller). While walking the
+//! accelerometer is skipped by default (its gravity direction is tilted by the torso's own
+//! accelerations), so the gyro carries the pitch within a step and each touchdown corrects
+//! pitch and, through the cross covariance, the bias.
+//!
 //! Allocation-free, `Copy`; time is an argument (`dt_s`).
 
 /// Standard gravity, m/s².
@@ -107,6 +114,37 @@ impl PitchEstimator {
         (-accel_x_mps2).atan2(accel_z_mps2)
     }
 
+    /// A direct pitch measurement (e.g. the kinematic pitch at a touchdown, when both feet are
+    /// on flat ground) with standard deviation `sigma_rad`: a Kalman update with H = [1, 0],
+    /// which also corrects the bias through the cross covariance. Ignored before the first
+    /// sample, for a non-finite value, and as an outlier beyond 4σ of the innovation.
+    pub fn measure_pitch(&mut self, pitch_rad: f64, sigma_rad: f64) {
+        if !self.initialized || !pitch_rad.is_finite() || !sigma_rad.is_finite() || sigma_rad <= 0.0
+        {
+            return;
+        }
+        let innovation = wrap_pi(pitch_rad - self.pitch_rad);
+        let r = sigma_rad * sigma_rad;
+        // Outlier gate: a measurement more than 4σ of the innovation away is rejected.
+        if innovation * innovation > 16.0 * (self.p[0][0] + r) {
+            return;
+        }
+        self.correct(innovation, r);
+    }
+
+    fn correct(&mut self, innovation: f64, r: f64) {
+        let s = self.p[0][0] + r;
+        let k0 = self.p[0][0] / s;
+        let k1 = self.p[1][0] / s;
+        self.pitch_rad += k0 * innovation;
+        self.bias_rad_s += k1 * innovation;
+        let [[a, b], [_, d]] = self.p;
+        self.p = [
+            [(1.0 - k0) * a, (1.0 - k0) * b],
+            [(1.0 - k0) * b, d - k1 * b],
+        ];
+    }
+
     /// One filter step with a gyro rate and an accelerometer sample taken `dt_s` after the
     /// previous one. Returns whether the accelerometer update was used.
     pub fn update(
@@ -115,6 +153,19 @@ impl PitchEstimator {
         accel_x_mps2: f64,
         accel_z_mps2: f64,
         dt_s: f64,
+    ) -> bool {
+        self.update_with(gyro_pitch_rad_s, accel_x_mps2, accel_z_mps2, dt_s, true)
+    }
+
+    /// [`Self::update`], with the accelerometer correction only if `use_accel` (the
+    /// prediction always runs; the first sample still initializes from gravity).
+    pub fn update_with(
+        &mut self,
+        gyro_pitch_rad_s: f64,
+        accel_x_mps2: f64,
+        accel_z_mps2: f64,
+        dt_s: f64,
+        use_accel: bool,
     ) -> bool {
         let theta_acc = Self::accel_pitch_rad(accel_x_mps2, accel_z_mps2);
         let norm = accel_x_mps2.hypot(accel_z_mps2);
@@ -140,22 +191,12 @@ impl PitchEstimator {
         let p01 = p[0][1] - dt * p[1][1];
         let p11 = p[1][1] + q_bias;
         self.p = [[p00, p01], [p01, p11]];
-        if !accel_ok {
+        if !accel_ok || !use_accel {
             return false;
         }
         // Update with H = [1, 0].
         let r = self.params.accel_pitch_noise_rad.powi(2);
-        let s = self.p[0][0] + r;
-        let k0 = self.p[0][0] / s;
-        let k1 = self.p[1][0] / s;
-        let innovation = wrap_pi(theta_acc - self.pitch_rad);
-        self.pitch_rad += k0 * innovation;
-        self.bias_rad_s += k1 * innovation;
-        let [[a, b], [_, d]] = self.p;
-        self.p = [
-            [(1.0 - k0) * a, (1.0 - k0) * b],
-            [(1.0 - k0) * b, d - k1 * b],
-        ];
+        self.correct(wrap_pi(theta_acc - self.pitch_rad), r);
         true
     }
 }
@@ -257,5 +298,45 @@ mod tests {
             (wrap_pi(-1.5 * core::f64::consts::PI) - 0.5 * core::f64::consts::PI).abs() < 1e-12
         );
         assert!((wrap_pi(-0.5) + 0.5).abs() < 1e-15);
+    }
+
+    /// Walking mode: gyro only between steps, a kinematic pitch at each "touchdown" (every
+    /// 0.5 s, σ 0.01 rad): the bias becomes observable and converges; an outlier is rejected.
+    #[test]
+    fn touchdown_pitch_measurements_make_the_bias_observable_and_reject_outliers() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let mut est = PitchEstimator::new(params());
+        est.initialize(0.0, 0.0, 0.002);
+        let (dt, bias) = (1e-3, 0.02);
+        let w = core::f64::consts::TAU * 0.5;
+        let mut sq = 0.0;
+        let n = 20_000;
+        for k in 0..n {
+            let t = k as f64 * dt;
+            let theta = 0.1 * (w * t).sin();
+            let rate = 0.1 * w * (w * t).cos();
+            let gyro = rate + bias + 0.01 * gauss(&mut rng);
+            // The accelerometer is ignored while walking, whatever it reads.
+            assert!(!est.update_with(gyro, 5.0, 3.0, dt, false));
+            if k % 500 == 499 {
+                est.measure_pitch(theta + 0.01 * gauss(&mut rng), 0.01);
+            }
+            if k > n / 2 {
+                sq += (est.pitch_rad() - theta).powi(2);
+            }
+        }
+        let rms = (sq / (n / 2) as f64).sqrt();
+        assert!(rms < 0.01, "pitch rms {rms}");
+        assert!(
+            (est.gyro_bias_rad_s() - bias).abs() < 0.005,
+            "bias {}",
+            est.gyro_bias_rad_s()
+        );
+        // A measurement 0.5 rad off (a touchdown on an obstacle, a mis-detection) is dropped.
+        let before = est.pitch_rad();
+        est.measure_pitch(before + 0.5, 0.01);
+        assert_eq!(est.pitch_rad(), before);
+        est.measure_pitch(f64::NAN, 0.01);
+        assert_eq!(est.pitch_rad(), before);
     }
 }

@@ -30,6 +30,12 @@ pub trait Imu {
     /// The newest sample if one arrived since the last call (`None`: nothing new). `t_s` is
     /// the loop's time, for backends that stamp samples themselves.
     fn read_imu(&mut self, t_s: f64) -> Option<ImuSample>;
+
+    /// The true torso pitch, rad, where the backend knows it (a simulator); `None` on hardware.
+    /// Used only to score the estimator, never by the controller.
+    fn true_pitch_rad(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// An IMU at rest at a fixed pitch (for tests and bench runs without robot dynamics).
@@ -91,11 +97,17 @@ impl<B, I: Imu> Imu for WithImu<B, I> {
     fn read_imu(&mut self, t_s: f64) -> Option<ImuSample> {
         self.imu.read_imu(t_s)
     }
+    fn true_pitch_rad(&self) -> Option<f64> {
+        self.imu.true_pitch_rad()
+    }
 }
 
 /// A simulated bus whose plant also simulates the torso IMU (the robot simulator).
 impl<P: JointPlant + Imu> Imu for SimBus<P> {
     fn read_imu(&mut self, t_s: f64) -> Option<ImuSample> {
         self.plant_mut().read_imu(t_s)
+    }
+    fn true_pitch_rad(&self) -> Option<f64> {
+        self.plant().true_pitch_rad()
     }
 }

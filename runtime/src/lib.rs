@@ -44,7 +44,7 @@
 //! # fn backend() -> WithImu<drivers::sim_bus::SimBus<drivers::sim_bus::InertiaDampingPlant>, StaticImu> { unimplemented!() }
 //!
 //! # fn main() -> runtime::Result<()> {
-//! let setup = Setup::load("configs/runtime/adam.toml", "configs/gaits/adam_walk.json")?;
+//! let setup = Setup::load("configs/runtime/adam.toml", "configs/gaits/adam_codesign.json")?;
 //! // Any MotorBus + Imu: a SimBus paired with an IMU here; SocketCanBus + IMU on the robot.
 //! let backend = backend();
 //! let mut options = LoopOptions::simulation(10.0);
@@ -75,6 +75,9 @@ pub mod telemetry;
 pub use error::{Result, RuntimeError};
 pub use io::{Imu, ImuSample};
 pub use rt_loop::{run, LoopOptions, RunSummary};
+
+/// The runtime's default gait (repository-relative): the co-designed ADAM's (`adam codesign`).
+pub const DEFAULT_GAIT: &str = "configs/gaits/adam_codesign.json";
 
 /// Everything [`run`] needs besides the backend: config, gait and robot model, loaded and
 /// cross-checked.
@@ -124,12 +127,13 @@ impl Setup {
         })
     }
 
-    /// The shipped ADAM config and gait of this repository (tests, examples, benchmarks).
+    /// The shipped ADAM config and default gait of this repository, the co-designed one
+    /// (tests, examples, benchmarks).
     pub fn shipped() -> Result<Self> {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
         Self::load(
             root.join("configs/runtime/adam.toml"),
-            root.join("configs/gaits/adam_walk.json"),
+            root.join(DEFAULT_GAIT),
         )
     }
 

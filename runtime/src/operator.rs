@@ -3,8 +3,15 @@
 //! A single-producer single-consumer ring ([`rtrb`], wait-free, allocated once) carries
 //! ordinary commands; the emergency stop is a separate latching atomic flag, so it is never
 //! lost even when the ring is full, and it is seen first.
+//!
+//! Two sources feed an [`OperatorHandle`] from their own threads, never from the control
+//! thread: the keyboard ([`spawn_keyboard`], one command per line, [`parse_key`]) and iceoryx2
+//! ([`spawn_iceoryx2_forwarder`]: [`OperatorMessage`]s on `<telemetry.service_name>/operator`,
+//! sent by `adam op <command>` or any other process with [`send_over_iceoryx2`]).
 
 use crate::controller::OperatorCommand;
+#[cfg(feature = "iceoryx2")]
+use iceoryx2::prelude::ZeroCopySend;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -79,10 +86,312 @@ impl OperatorReceiver {
     }
 }
 
+/// Where operator input threads put commands: an [`OperatorHandle`], or a [`SharedHandle`] when
+/// several sources (keyboard and iceoryx2) feed the same loop.
+pub trait CommandSink: Send + 'static {
+    /// Queue a command (an e-stop latches and is never lost).
+    fn send_command(&mut self, command: OperatorCommand) -> Result<(), QueueFull>;
+}
+
+impl CommandSink for OperatorHandle {
+    fn send_command(&mut self, command: OperatorCommand) -> Result<(), QueueFull> {
+        self.send(command)
+    }
+}
+
+/// An [`OperatorHandle`] shared by several input threads (a mutex on the operator side only;
+/// the control thread's end stays wait-free).
+#[derive(Clone)]
+pub struct SharedHandle(Arc<std::sync::Mutex<OperatorHandle>>);
+
+impl SharedHandle {
+    /// Share `handle`.
+    pub fn new(handle: OperatorHandle) -> Self {
+        Self(Arc::new(std::sync::Mutex::new(handle)))
+    }
+}
+
+impl CommandSink for SharedHandle {
+    fn send_command(&mut self, command: OperatorCommand) -> Result<(), QueueFull> {
+        match self.0.lock() {
+            Ok(mut h) => h.send(command),
+            // A panicked input thread poisoned the lock; the handle itself is still sound.
+            Err(poisoned) => poisoned.into_inner().send(command),
+        }
+    }
+}
+
+/// A keyboard line as a command: `s`/`start`, `w`/`walk`, `p`/`stop`, `d`/`damp`, `r`/`reset`,
+/// `e`/`estop`/`x` (case-insensitive, surrounding blanks ignored); anything else is `None`.
+pub fn parse_key(line: &str) -> Option<OperatorCommand> {
+    match line.trim().to_ascii_lowercase().as_str() {
+        "s" | "start" => Some(OperatorCommand::Start),
+        "w" | "walk" => Some(OperatorCommand::Walk),
+        "p" | "stop" => Some(OperatorCommand::Stop),
+        "d" | "damp" => Some(OperatorCommand::Damp),
+        "r" | "reset" => Some(OperatorCommand::Reset),
+        "e" | "x" | "estop" | "e-stop" => Some(OperatorCommand::EStop),
+        _ => None,
+    }
+}
+
+/// The keys [`parse_key`] knows, for a prompt.
+pub const KEY_HELP: &str = "keys + Enter: s start, w walk, p stop, d damp, r reset, e e-stop";
+
+/// Reads commands from `input` (stdin in the CLI) on a thread of its own until it ends or the
+/// ring is gone; unknown lines are reported on stderr. Never touches the control thread.
+pub fn spawn_keyboard<R: std::io::BufRead + Send + 'static, H: CommandSink>(
+    input: R,
+    mut handle: H,
+) -> std::thread::JoinHandle<()> {
+    std::thread::spawn(move || {
+        for line in input.lines() {
+            let Ok(line) = line else { break };
+            match parse_key(&line) {
+                Some(cmd) => {
+                    if let Err(e) = handle.send_command(cmd) {
+                        eprintln!("operator: {e}");
+                    }
+                }
+                None if line.trim().is_empty() => {}
+                None => eprintln!("operator: unknown key {:?} ({KEY_HELP})", line.trim()),
+            }
+        }
+    })
+}
+
+/// An operator command on the wire: fixed-size, plain old data, for iceoryx2.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend))]
+#[repr(C)]
+pub struct OperatorMessage {
+    /// [`OperatorMessage::code`] of the command.
+    pub code: u32,
+}
+
+impl OperatorMessage {
+    /// The wire code of a command (stable).
+    pub fn code(command: OperatorCommand) -> u32 {
+        match command {
+            OperatorCommand::Start => 1,
+            OperatorCommand::Walk => 2,
+            OperatorCommand::Stop => 3,
+            OperatorCommand::Damp => 4,
+            OperatorCommand::Reset => 5,
+            OperatorCommand::EStop => 6,
+        }
+    }
+
+    /// The message for a command.
+    pub fn new(command: OperatorCommand) -> Self {
+        Self {
+            code: Self::code(command),
+        }
+    }
+
+    /// The command, or `None` for an unknown code (a message of another version).
+    pub fn command(&self) -> Option<OperatorCommand> {
+        [
+            OperatorCommand::Start,
+            OperatorCommand::Walk,
+            OperatorCommand::Stop,
+            OperatorCommand::Damp,
+            OperatorCommand::Reset,
+            OperatorCommand::EStop,
+        ]
+        .into_iter()
+        .find(|&c| Self::code(c) == self.code)
+    }
+}
+
+/// The iceoryx2 service of operator commands for a runtime publishing on `telemetry_service`.
+pub fn operator_service_name(telemetry_service: &str) -> String {
+    format!("{telemetry_service}/operator")
+}
+
+/// Forwards [`OperatorMessage`]s from the iceoryx2 service `service` into `handle`, polling
+/// every 5 ms on a thread of its own, until `stop` is set. The service is opened (or created)
+/// before this returns, so a message sent after it returns is delivered.
+#[cfg(feature = "iceoryx2")]
+pub fn spawn_iceoryx2_forwarder<H: CommandSink>(
+    service: &str,
+    mut handle: H,
+    stop: Arc<AtomicBool>,
+) -> crate::Result<std::thread::JoinHandle<()>> {
+    let (ready_tx, ready_rx) = std::sync::mpsc::channel();
+    let name = service.to_string();
+    let thread = std::thread::spawn(move || {
+        use iceoryx2::prelude::*;
+        let err = |m: String| crate::RuntimeError::Telemetry {
+            service: name.clone(),
+            message: m,
+        };
+        let setup = || -> crate::Result<_> {
+            let node = NodeBuilder::new()
+                .create::<ipc::Service>()
+                .map_err(|e| err(format!("node: {e:?}")))?;
+            let service_name: ServiceName = name
+                .as_str()
+                .try_into()
+                .map_err(|e| err(format!("name: {e:?}")))?;
+            let service = node
+                .service_builder(&service_name)
+                .publish_subscribe::<OperatorMessage>()
+                .open_or_create()
+                .map_err(|e| err(format!("service: {e:?}")))?;
+            let subscriber = service
+                .subscriber_builder()
+                .create()
+                .map_err(|e| err(format!("subscriber: {e:?}")))?;
+            Ok((node, service, subscriber))
+        };
+        let (node, service, subscriber) = match setup() {
+            Ok(ports) => {
+                let _ = ready_tx.send(Ok(()));
+                ports
+            }
+            Err(e) => {
+                let _ = ready_tx.send(Err(e));
+                return;
+            }
+        };
+        while !stop.load(Ordering::Acquire) {
+            while let Ok(Some(sample)) = subscriber.receive() {
+                match sample.payload().command() {
+                    Some(cmd) => {
+                        if let Err(e) = handle.send_command(cmd) {
+                            eprintln!("operator: {e}");
+                        }
+                    }
+                    None => eprintln!(
+                        "operator: ignored a message with unknown code {}",
+                        sample.payload().code
+                    ),
+                }
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        drop(subscriber);
+        drop(service);
+        drop(node);
+    });
+    match ready_rx.recv() {
+        Ok(Ok(())) => Ok(thread),
+        Ok(Err(e)) => Err(e),
+        Err(_) => Err(crate::RuntimeError::Telemetry {
+            service: service.to_string(),
+            message: "the forwarder thread ended before opening the service".into(),
+        }),
+    }
+}
+
+/// Sends one command to a runtime's operator service (`adam op`) and returns how many runtimes
+/// it reached. The runtime must be running (its forwarder holds a subscriber); a message sent
+/// with no subscriber is lost. Takes about 50 ms (the message is held until it is read).
+#[cfg(feature = "iceoryx2")]
+pub fn send_over_iceoryx2(service: &str, command: OperatorCommand) -> crate::Result<usize> {
+    use iceoryx2::prelude::*;
+    let err = |m: String| crate::RuntimeError::Telemetry {
+        service: service.to_string(),
+        message: m,
+    };
+    let node = NodeBuilder::new()
+        .create::<ipc::Service>()
+        .map_err(|e| err(format!("node: {e:?}")))?;
+    let service_name: ServiceName = service
+        .try_into()
+        .map_err(|e| err(format!("name: {e:?}")))?;
+    let port = node
+        .service_builder(&service_name)
+        .publish_subscribe::<OperatorMessage>()
+        .open_or_create()
+        .map_err(|e| err(format!("service: {e:?}")))?;
+    let publisher = port
+        .publisher_builder()
+        .create()
+        .map_err(|e| err(format!("publisher: {e:?}")))?;
+    let sample = publisher
+        .loan_uninit()
+        .map_err(|e| err(format!("loan: {e:?}")))?;
+    let sample = sample.write_payload(OperatorMessage::new(command));
+    let receivers = sample.send().map_err(|e| err(format!("send: {e:?}")))?;
+    // The sample lives in this publisher's shared memory: keep it alive for ten polling periods
+    // of the runtime's forwarder (5 ms) so that it is read before this process lets go of it.
+    std::thread::sleep(std::time::Duration::from_millis(50));
+    drop(publisher);
+    drop(port);
+    drop(node);
+    Ok(receivers)
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn keys_parse_to_commands_and_unknown_lines_do_not() {
+        assert_eq!(parse_key(" W \n"), Some(OperatorCommand::Walk));
+        assert_eq!(parse_key("start"), Some(OperatorCommand::Start));
+        assert_eq!(parse_key("e"), Some(OperatorCommand::EStop));
+        assert_eq!(parse_key("p"), Some(OperatorCommand::Stop));
+        assert_eq!(parse_key("walk please"), None);
+        assert_eq!(parse_key(""), None);
+        for cmd in [
+            OperatorCommand::Start,
+            OperatorCommand::Walk,
+            OperatorCommand::Stop,
+            OperatorCommand::Damp,
+            OperatorCommand::Reset,
+            OperatorCommand::EStop,
+        ] {
+            assert_eq!(OperatorMessage::new(cmd).command(), Some(cmd));
+        }
+        assert_eq!(OperatorMessage { code: 99 }.command(), None);
+    }
+
+    #[test]
+    fn keyboard_lines_reach_the_control_end_in_order() {
+        let (tx, mut rx) = channel(8);
+        let input = std::io::Cursor::new("s\nnonsense\n\nw\ne\n");
+        spawn_keyboard(input, tx).join().unwrap();
+        assert_eq!(rx.poll(), Some(OperatorCommand::EStop));
+        assert_eq!(rx.poll(), Some(OperatorCommand::Start));
+        assert_eq!(rx.poll(), Some(OperatorCommand::Walk));
+        assert_eq!(rx.poll(), None);
+    }
+
+    #[cfg(feature = "iceoryx2")]
+    #[test]
+    fn commands_sent_over_iceoryx2_reach_the_control_end() {
+        let name = format!(
+            "adam/runtime/test-operator/{}/{}",
+            std::process::id(),
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .unwrap()
+                .as_nanos()
+        );
+        let (tx, mut rx) = channel(8);
+        let stop = Arc::new(AtomicBool::new(false));
+        let forwarder = spawn_iceoryx2_forwarder(&name, tx, stop.clone()).unwrap();
+        assert_eq!(
+            send_over_iceoryx2(&name, OperatorCommand::Start).unwrap(),
+            1
+        );
+        assert_eq!(send_over_iceoryx2(&name, OperatorCommand::Walk).unwrap(), 1);
+        let mut got = Vec::new();
+        let t0 = std::time::Instant::now();
+        while got.len() < 2 && t0.elapsed() < std::time::Duration::from_secs(5) {
+            if let Some(c) = rx.poll() {
+                got.push(c);
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
+        stop.store(true, Ordering::Release);
+        forwarder.join().unwrap();
+        assert_eq!(got, vec![OperatorCommand::Start, OperatorCommand::Walk]);
+    }
 
     #[test]
     fn commands_arrive_in_order_and_estop_jumps_the_queue_even_when_full() {

@@ -132,6 +132,12 @@ pub struct TrackingStats {
     pub sum_sq_rad2: [f64; OUTPUTS],
     /// max |y^d − y^a| per output, rad.
     pub max_abs_rad: [f64; OUTPUTS],
+    /// Walk ticks with a ground-truth pitch (simulation), and Σ (θ̂ − θ)², rad².
+    pub pitch_truth_ticks: u64,
+    /// Σ (estimated − true pitch)² over those ticks, rad².
+    pub pitch_sum_sq_rad2: f64,
+    /// max |estimated − true pitch|, rad.
+    pub pitch_max_abs_rad: f64,
 }
 
 impl TrackingStats {
@@ -142,6 +148,20 @@ impl TrackingStats {
             self.sum_sq_rad2[i] += e * e;
             self.max_abs_rad[i] = self.max_abs_rad[i].max(e.abs());
         }
+    }
+
+    fn add_pitch(&mut self, estimate_rad: f64, truth_rad: f64) {
+        let e = estimate_rad - truth_rad;
+        self.pitch_truth_ticks += 1;
+        self.pitch_sum_sq_rad2 += e * e;
+        self.pitch_max_abs_rad = self.pitch_max_abs_rad.max(e.abs());
+    }
+
+    /// RMS of the pitch estimate's error against the ground truth while walking, rad (`None`
+    /// without ground truth, i.e. on hardware).
+    pub fn pitch_rms_rad(&self) -> Option<f64> {
+        (self.pitch_truth_ticks > 0)
+            .then(|| (self.pitch_sum_sq_rad2 / self.pitch_truth_ticks as f64).sqrt())
     }
 
     /// RMS error of output `i` over the Walk ticks, rad (NaN without Walk ticks).
@@ -189,6 +209,9 @@ pub struct RunSummary {
     pub last_sample: StateSample,
     /// Controller tick compute time.
     pub tick_times: TickTimes,
+    /// How late each tick started against its absolute deadline (loop jitter; zero under a
+    /// simulated clock).
+    pub wake_latency: TickTimes,
     /// Output tracking while walking.
     pub tracking: TrackingStats,
     /// Log statistics, if logging.
@@ -392,6 +415,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     let mut out = TickOutput::default();
     let mut sample = StateSample::default();
     let mut histogram = Histogram::new();
+    let mut wake_histogram = Histogram::new();
     let mut transitions = Vec::with_capacity(64);
     let mut script = options.script.iter().peekable();
     let ticks = (options.duration_s * rate_hz).round().max(0.0) as u64;
@@ -414,6 +438,9 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
 
     for tick in 0..ticks {
         let t = clock.now_s() - t0;
+        // Wake-up jitter: how late this tick starts against its absolute deadline.
+        let late_s = (t0 + t) - deadline;
+        wake_histogram.add((late_s.max(0.0) * 1e9) as u64);
         // Exchange: a NaN position marks "no reply written".
         for r in replies.iter_mut() {
             r.q_rad = f64::NAN;
@@ -475,6 +502,9 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         let status = &out.status;
         if status.state == ControlState::Walk {
             tracking.add(status);
+            if let Some(truth) = backend.true_pitch_rad() {
+                tracking.add_pitch(status.pitch_rad, truth);
+            }
         }
         if let Some((from, to)) = status.transition {
             if transitions.len() < transitions.capacity() {
@@ -529,6 +559,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         transitions,
         last_sample: sample,
         tick_times: histogram.times(),
+        wake_latency: wake_histogram.times(),
         tracking,
         log,
         publish_failures,

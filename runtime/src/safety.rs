@@ -148,6 +148,7 @@ pub struct SafetyMonitor {
     saturated_ticks: [u32; SLOTS],
     missing: [u32; SLOTS],
     last_imu_t_s: f64,
+    implausible_imu: u32,
 }
 
 impl SafetyMonitor {
@@ -160,6 +161,7 @@ impl SafetyMonitor {
             saturated_ticks: [0; SLOTS],
             missing: [0; SLOTS],
             last_imu_t_s: f64::NEG_INFINITY,
+            implausible_imu: 0,
         }
     }
 
@@ -167,6 +169,27 @@ impl SafetyMonitor {
     pub fn reset_counters(&mut self) {
         self.saturated_ticks = [0; SLOTS];
         self.missing = [0; SLOTS];
+    }
+
+    /// Whether the gyro of an IMU sample is usable (finite, within the limit). The controller
+    /// integrates only those; an accelerometer beyond its range is a real impact, not a glitch.
+    pub fn gyro_plausible(&self, imu: &ImuSample) -> bool {
+        imu.gyro_pitch_rad_s.is_finite()
+            && imu.gyro_pitch_rad_s.abs() <= self.limits.max_gyro_rad_s
+            && imu.accel_x_mps2.is_finite()
+            && imu.accel_z_mps2.is_finite()
+    }
+
+    /// Whether an IMU sample is physically plausible (finite, |gyro| and ‖accel‖ within the
+    /// limits).
+    pub fn imu_plausible(&self, imu: &ImuSample) -> bool {
+        let l = &self.limits;
+        let norm = imu.accel_x_mps2.hypot(imu.accel_z_mps2);
+        imu.gyro_pitch_rad_s.is_finite()
+            && imu.gyro_pitch_rad_s.abs() <= l.max_gyro_rad_s
+            && norm.is_finite()
+            && norm >= l.accel_norm_range_mps2[0]
+            && norm <= l.accel_norm_range_mps2[1]
     }
 
     /// Update the counters with this tick and, if `armed`, return the first trip.
@@ -192,14 +215,16 @@ impl SafetyMonitor {
         // IMU: plausibility of this sample, then age.
         if let Some(imu) = input.imu {
             let norm = imu.accel_x_mps2.hypot(imu.accel_z_mps2);
-            let plausible = imu.gyro_pitch_rad_s.is_finite()
-                && imu.gyro_pitch_rad_s.abs() <= l.max_gyro_rad_s
-                && norm.is_finite()
-                && norm >= l.accel_norm_range_mps2[0]
-                && norm <= l.accel_norm_range_mps2[1];
+            let plausible = self.imu_plausible(imu);
             if plausible {
                 self.last_imu_t_s = self.last_imu_t_s.max(imu.t_s);
+                self.implausible_imu = 0;
             } else {
+                self.implausible_imu = self.implausible_imu.saturating_add(1);
+            }
+            // A foot impact is a millisecond spike of the accelerometer; only a run of
+            // implausible samples is a fault.
+            if !plausible && self.implausible_imu >= l.max_implausible_imu_samples {
                 first(Trip::ImuImplausible {
                     gyro_rad_s: imu.gyro_pitch_rad_s,
                     accel_norm_mps2: norm,

@@ -14,7 +14,7 @@
 //! double-support pose at rest, from which the state-based phase cannot start a step.
 
 use crate::io::Imu;
-use crate::rt_loop::{LoopOptions, RunSummary, SimulatedClock};
+use crate::rt_loop::{LoopOptions, MonotonicClock, RunSummary, SimulatedClock};
 use crate::{Result, RuntimeError, Setup};
 use drivers::imu::ImuNoise;
 use drivers::sim::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
@@ -37,6 +37,9 @@ pub struct SimWalkOptions {
     pub seed: u64,
     /// Write an MCAP log here.
     pub log_path: Option<PathBuf>,
+    /// Pace the loop by the wall clock at the config's rate (measures loop jitter) instead of
+    /// running as fast as the CPU allows under a simulated clock.
+    pub real_time: bool,
 }
 
 impl SimWalkOptions {
@@ -49,6 +52,7 @@ impl SimWalkOptions {
             imu_noise: ImuNoise::default(),
             seed: 1,
             log_path: None,
+            real_time: false,
         }
     }
 }
@@ -96,6 +100,9 @@ impl Imu for RobotSim {
             accel_x_mps2: s.accel_x_mps2,
             accel_z_mps2: s.accel_z_mps2,
         })
+    }
+    fn true_pitch_rad(&self) -> Option<f64> {
+        Some(self.torso_pitch_rad())
     }
 }
 
@@ -187,19 +194,34 @@ fn sim_error(e: &drivers::sim::RobotSimError) -> RuntimeError {
 /// Walk the gait on the simulated treadmill for `options.duration_s` (simulated time, as fast
 /// as the CPU allows) and measure the walk from the simulator's ground truth.
 pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
+    walk_with_operator(setup, options, None)
+}
+
+/// [`walk`] with operator commands (keyboard, iceoryx2) arriving through `operator`.
+pub fn walk_with_operator(
+    setup: &Setup,
+    options: &SimWalkOptions,
+    operator: Option<crate::operator::OperatorReceiver>,
+) -> Result<SimWalkReport> {
     let backend = sim_backend(setup, options)?;
     let belt_speed_mps = backend.plant().config().belt_speed_mps;
     let x0_m = backend.plant().base_position_m()[0];
     let mut loop_options = LoopOptions::simulation(options.duration_s);
     loop_options.start_walking = true;
     loop_options.log_path = options.log_path.clone();
-    let (summary, backend) = crate::run(
-        setup,
-        backend,
-        SimulatedClock::default(),
-        loop_options,
-        None,
-    )?;
+    // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
+    loop_options.realtime = options.real_time;
+    let (summary, backend) = if options.real_time {
+        crate::run(setup, backend, MonotonicClock, loop_options, operator)?
+    } else {
+        crate::run(
+            setup,
+            backend,
+            SimulatedClock::default(),
+            loop_options,
+            operator,
+        )?
+    };
     let sim = backend.plant();
     let mut report = SimWalkReport {
         duration_s: options.duration_s,
@@ -251,6 +273,14 @@ pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
     Ok(report)
 }
 
+fn granted(r: Option<core::result::Result<(), i32>>) -> String {
+    match r {
+        None => "not asked".into(),
+        Some(Ok(())) => "ok".into(),
+        Some(Err(errno)) => format!("denied (errno {errno})"),
+    }
+}
+
 impl std::fmt::Display for SimWalkReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let s = &self.summary;
@@ -289,6 +319,15 @@ impl std::fmt::Display for SimWalkReport {
         let fall = self
             .fall
             .map_or_else(|| "none".to_string(), |(t, w)| format!("{w:?} at {t:.3} s"));
+        if let Some(rms) = t.pitch_rms_rad() {
+            writeln!(
+                f,
+                "pitch estimate vs ground truth: RMS {:.3}°, max {:.3}° (bias estimate {:+.4} rad/s)",
+                rms.to_degrees(),
+                t.pitch_max_abs_rad.to_degrees(),
+                s.last_sample.gyro_bias_rad_s
+            )?;
+        }
         writeln!(
             f,
             "safety trips: {trip} | falls: {fall} | repeated touchdowns {} | friction warnings {}",
@@ -302,6 +341,20 @@ impl std::fmt::Display for SimWalkReport {
             s.tick_times.max_ns as f64 / 1e3,
             s.missing_replies,
             s.bus_errors
-        )
+        )?;
+        if s.wake_latency.max_ns > 0 {
+            write!(
+                f,
+                "\nloop wake-up latency (jitter): median {:.1} µs, p99 {:.1} µs, max {:.1} µs | overruns {} (longest streak {}) | mlockall {} SCHED_FIFO {}",
+                s.wake_latency.median_ns as f64 / 1e3,
+                s.wake_latency.p99_ns as f64 / 1e3,
+                s.wake_latency.max_ns as f64 / 1e3,
+                s.overruns,
+                s.max_overrun_streak,
+                granted(s.realtime.memory_locked),
+                granted(s.realtime.fifo),
+            )?;
+        }
+        Ok(())
     }
 }

@@ -309,6 +309,9 @@ pub struct RobotSim {
     fallen: Option<FallCause>,
     max_penetration_m: f64,
     imu: Option<NoisyImu>,
+    /// (time, base velocity) at the previous IMU read: the IMU reports the mean acceleration
+    /// since then.
+    imu_last: Option<(f64, [f64; 2])>,
     fault_t_s: Option<f64>,
 }
 
@@ -363,6 +366,7 @@ impl RobotSim {
             fallen: None,
             max_penetration_m: 0.0,
             imu: None,
+            imu_last: None,
             fault_t_s: None,
             model,
             config,
@@ -389,6 +393,7 @@ impl RobotSim {
     }
 
     fn set_state_with_stance(&mut self, q: &[f64], dq: &[f64], only: Option<usize>) -> Result<()> {
+        self.imu_last = None;
         let n = self.model.dof();
         for (what, v) in [("q", q), ("dq", dq)] {
             if v.len() != n {
@@ -434,6 +439,7 @@ impl RobotSim {
     /// Attach a seeded IMU on the torso (at the hip axis) with the given noise.
     pub fn attach_imu(&mut self, noise: ImuNoise, seed: u64) {
         self.imu = Some(NoisyImu::new(noise, seed));
+        self.imu_last = None;
     }
 
     /// Advance by `dt_s` with `torque_nm[k]` on actuated joint `k` (the model's
@@ -1037,8 +1043,24 @@ impl JointPlant for RobotSim {
 }
 
 impl Imu for RobotSim {
+    /// The IMU sample: the gyro at this instant, the accelerometer averaged since the previous
+    /// read (an IMU's output filter integrates over its sample period, so a foot impact shows
+    /// as a spike of the mean acceleration of that period, not only in the 0.1 ms sim step
+    /// that contains it).
     fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
-        let truth = self.imu_truth();
+        let mut truth = self.imu_truth();
+        let v = [self.dq[0], self.dq[1]];
+        if let Some((t0, v0)) = self.imu_last {
+            let dt = self.t_s - t0;
+            if dt > 0.0 {
+                let g = self.model.gravity_mps2;
+                let f = [(v[0] - v0[0]) / dt, (v[1] - v0[1]) / dt + g];
+                let (s, c) = self.q[2].sin_cos();
+                truth.accel_x_mps2 = c * f[0] - s * f[1];
+                truth.accel_z_mps2 = s * f[0] + c * f[1];
+            }
+        }
+        self.imu_last = Some((self.t_s, v));
         let imu = self.imu.as_mut().ok_or(ImuError::NotAttached)?;
         imu.measure(&truth, out);
         Ok(())

@@ -1,0 +1,360 @@
+//! HZD co-design of the thigh and shin lengths with the gait (paper Sec. III–IV).
+//!
+//! ```text
+//! DesignLengths L₀ ─▶ GenerateModel(L₀) ─▶ plan_gait (fixed design, two-step solve) ─▶ x₀
+//!   loop j: HzdProblem::with_codesign(model_j, x_j ++ L_j) ─▶ solve ─▶ (x*, L*)
+//!           GenerateModel(L*) ─▶ model_{j+1}      until ‖L* − L_j‖∞ < δ (Alg. 1)
+//!                                                  or once (exact coupling)
+//!   polish: the cost-of-transport solve at the final model, design fixed ─▶ gait file + URDF
+//! ```
+//!
+//! The lengths enter the NLP through the design virtual joints (massless prismatic joints in
+//! the URDF), equal left and right and constant over the step ([`Codesign`]). Link inertias
+//! follow the lengths in one of two ways ([`InertiaCoupling`]):
+//! - **exact**: the cubic fits of mass, com and inertia are evaluated inside every dynamics and
+//!   impact constraint and differentiated with them (dual numbers), so one solve is
+//!   self-consistent;
+//! - **alg1** (the paper's Alg. 1): inertias frozen at the current model during a solve, then
+//!   the model is regenerated at the new lengths and the solve repeated, warm-started, until no
+//!   length moves more than δ.
+//!
+//! The objective during a co-design solve normalises by the total mass of the model the solve
+//! started from (the leg masses change a few percent with the lengths); the final polish solve,
+//! at the final model, reports the exact cost of transport.
+
+use crate::biped::PlanarBiped;
+use crate::collocation::{Codesign, HzdProblem};
+use crate::config::{InertiaCoupling, PlannerConfig};
+use crate::plan::{self, PlannedGait, Progress, StageReport};
+use crate::{PlannerError, Result};
+use model::design::{generate_model, DesignLengths};
+use std::time::Instant;
+
+/// One solve of the outer loop.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OuterIteration {
+    /// Lengths the solve started from (the model's), m: thigh, shin.
+    pub start_m: [f64; 2],
+    /// Lengths it found, m.
+    pub lengths_m: [f64; 2],
+    /// Cost of transport at its solution (mass of the starting model).
+    pub cost_of_transport: f64,
+    /// The solve.
+    pub report: StageReport,
+}
+
+/// A co-designed robot and gait.
+#[derive(Clone, Debug)]
+pub struct CodesignResult {
+    /// The final lengths.
+    pub design: DesignLengths,
+    /// The gait planned at the final lengths (the polish solve); its URDF is [`Self::urdf`].
+    pub planned: PlannedGait,
+    /// The URDF of the co-designed robot.
+    pub urdf: String,
+    /// The gait at the initial design (the warm start).
+    pub initial: PlannedGait,
+    /// The co-design solves.
+    pub outer: Vec<OuterIteration>,
+    /// Whether the outer loop met its tolerance (always, for exact coupling).
+    pub converged: bool,
+    /// Wall time of everything, s.
+    pub wall_time_s: f64,
+}
+
+/// Co-designs the thigh and shin lengths with the gait, starting from `config.codesign`'s
+/// initial lengths: plans the gait at that design first (the warm start), then
+/// [`codesign_from`]. `urdf_ref` is how the gait file will name the co-designed URDF.
+pub fn codesign(
+    config: &PlannerConfig,
+    urdf_ref: &str,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<CodesignResult> {
+    config.validate("planner config")?;
+    let start = Instant::now();
+    let lengths = config.codesign.initial_m;
+    let (model, urdf) = generate(lengths)?;
+    let initial = plan::plan_gait(&model, urdf_ref, &urdf, config, on_progress)?;
+    let mut r = codesign_from(config, urdf_ref, &initial, lengths, lengths, on_progress)?;
+    r.wall_time_s = start.elapsed().as_secs_f64();
+    Ok(r)
+}
+
+/// The co-design from a gait `initial` planned for the robot generated at `model_lengths`,
+/// with the length variables starting at `start_lengths` (the convergence study starts every
+/// run from the same gait and a different initial design).
+pub fn codesign_from(
+    config: &PlannerConfig,
+    urdf_ref: &str,
+    initial: &PlannedGait,
+    model_lengths: [f64; 2],
+    start_lengths: [f64; 2],
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<CodesignResult> {
+    let start = Instant::now();
+    let c = &config.codesign;
+    let (mut model, mut urdf) = generate(model_lengths)?;
+    let mut nominal = model_lengths;
+    let mut lengths = start_lengths;
+    let mut x = initial.x.clone();
+    let n_fixed = x.len();
+    let exact = c.inertia == InertiaCoupling::Exact;
+    let mut outer = Vec::new();
+    let mut converged = false;
+    for _ in 0..c.max_outer_iterations {
+        let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
+        let spec = Codesign {
+            nominal_m: nominal,
+            bounds_m: [c.thigh_m, c.shin_m],
+            exact_inertia: exact,
+        };
+        let mut x0 = x.clone();
+        x0.extend(lengths);
+        let problem = HzdProblem::with_codesign(biped, config.clone(), x0, true, Some(spec))?;
+        let (xs, report) = plan::solve_stage(&problem, "co-design", config, on_progress)?;
+        let l = &problem.layout;
+        let found = [xs[l.design_var(0)], xs[l.design_var(1)]];
+        outer.push(OuterIteration {
+            start_m: lengths,
+            lengths_m: found,
+            cost_of_transport: problem.cost_of_transport(&xs),
+            report,
+        });
+        let moved = (found[0] - lengths[0])
+            .abs()
+            .max((found[1] - lengths[1]).abs());
+        lengths = found;
+        nominal = found;
+        (model, urdf) = generate(lengths)?;
+        x = xs[..n_fixed].to_vec();
+        if exact || moved < c.tolerance_m {
+            converged = true;
+            break;
+        }
+    }
+    // Polish at the final model, design fixed: the gait file's robot is exactly this URDF.
+    let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
+    let problem = HzdProblem::new(biped, config.clone(), x, true)?;
+    let (xf, report) = plan::solve_stage(&problem, "polish", config, on_progress)?;
+    let mut gait = plan::gait_from_solution(
+        &problem,
+        &xf,
+        urdf_ref,
+        &urdf,
+        std::slice::from_ref(&report),
+    )?;
+    gait.feedforward = Some(crate::verify::feedforward_from_orbit(
+        &model,
+        &gait,
+        crate::verify::VerifyOptions::default(),
+    )?);
+    let size = (problem.layout.len(), nlp_constraints(&problem));
+    let planned = PlannedGait {
+        gait,
+        stages: vec![report],
+        x: xf,
+        feasible_x: Vec::new(),
+        size,
+        setup_time_s: 0.0,
+    };
+    Ok(CodesignResult {
+        design: DesignLengths {
+            thigh_length_m: lengths[0],
+            shin_length_m: lengths[1],
+        },
+        planned,
+        urdf,
+        initial: initial.clone(),
+        outer,
+        converged,
+        wall_time_s: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn nlp_constraints(problem: &HzdProblem) -> usize {
+    crate::nlp::NlpProblem::num_constraints(problem)
+}
+
+fn generate(lengths: [f64; 2]) -> Result<(model::PlanarModel, String)> {
+    let design = DesignLengths {
+        thigh_length_m: lengths[0],
+        shin_length_m: lengths[1],
+    };
+    let (model, urdf) = generate_model(&design).map_err(|e| PlannerError::Robot {
+        robot: "adam_planar".into(),
+        reason: format!("GenerateModel({lengths:?}): {e}"),
+    })?;
+    Ok((model, urdf))
+}
+
+/// One run of the convergence study.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepRun {
+    /// Initial thigh and shin length, m.
+    pub initial_m: [f64; 2],
+    /// The outcome: converged lengths and gait figures, or why the run failed.
+    pub outcome: std::result::Result<SweepOutcome, String>,
+    /// Wall time of the run, s.
+    pub wall_time_s: f64,
+}
+
+/// Where a run of the convergence study ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepOutcome {
+    /// Converged thigh and shin length, m.
+    pub lengths_m: [f64; 2],
+    /// Step length, m.
+    pub step_length_m: f64,
+    /// Step duration, s.
+    pub step_duration_s: f64,
+    /// Speed, m/s.
+    pub speed_mps: f64,
+    /// Cost of transport of the polished gait.
+    pub cost_of_transport: f64,
+    /// Solver iterations over the run's solves.
+    pub iterations: usize,
+    /// Solve time over the run's solves, s.
+    pub solve_time_s: f64,
+}
+
+/// The initial lengths of an `n × n` grid over the config's design bounds (thigh varies
+/// slowest).
+pub fn sweep_grid(config: &PlannerConfig, n: usize) -> Vec<[f64; 2]> {
+    let c = &config.codesign;
+    let at = |[a, b]: [f64; 2], i: usize| {
+        if n <= 1 {
+            0.5 * (a + b)
+        } else {
+            a + (b - a) * i as f64 / (n - 1) as f64
+        }
+    };
+    (0..n)
+        .flat_map(|i| (0..n).map(move |j| [at(c.thigh_m, i), at(c.shin_m, j)]))
+        .collect()
+}
+
+/// The paper's convergence study: one co-design per initial design in `starts`, all from the
+/// same warm start `initial` (planned at `model_lengths`), in parallel on all cores. `on_done`
+/// is called from the worker threads as runs finish (for a progress bar).
+pub fn sweep(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    model_lengths: [f64; 2],
+    starts: &[[f64; 2]],
+    on_done: &(dyn Fn(&SweepRun) + Sync),
+) -> Vec<SweepRun> {
+    use rayon::prelude::*;
+    starts
+        .par_iter()
+        .map(|&start| {
+            let t0 = Instant::now();
+            let outcome = codesign_from(
+                config,
+                "robot.urdf",
+                initial,
+                model_lengths,
+                start,
+                &mut |_| {},
+            )
+            .map(|r| {
+                let g = &r.planned.gait;
+                let reports = r
+                    .outer
+                    .iter()
+                    .map(|o| &o.report)
+                    .chain(r.planned.stages.iter());
+                let (iterations, solve_time_s) =
+                    reports.fold((0, 0.0), |(i, t), s| (i + s.iterations, t + s.solve_time_s));
+                SweepOutcome {
+                    lengths_m: [r.design.thigh_length_m, r.design.shin_length_m],
+                    step_length_m: g.step_length_m,
+                    step_duration_s: g.step_duration_s,
+                    speed_mps: g.speed_mps,
+                    cost_of_transport: g.cost_of_transport,
+                    iterations,
+                    solve_time_s,
+                }
+            })
+            .map_err(|e| e.to_string());
+            let run = SweepRun {
+                initial_m: start,
+                outcome,
+                wall_time_s: t0.elapsed().as_secs_f64(),
+            };
+            on_done(&run);
+            run
+        })
+        .collect()
+}
+
+/// Runs whose cost of transport is more than `relative` above the best run's: local minima.
+pub fn local_minima(runs: &[SweepRun], relative: f64) -> Vec<bool> {
+    let best = runs
+        .iter()
+        .filter_map(|r| r.outcome.as_ref().ok())
+        .map(|o| o.cost_of_transport)
+        .fold(f64::INFINITY, f64::min);
+    runs.iter()
+        .map(|r| {
+            r.outcome
+                .as_ref()
+                .is_ok_and(|o| o.cost_of_transport > best * (1.0 + relative))
+        })
+        .collect()
+}
+
+/// Mean and standard deviation (population) of a sample.
+pub fn mean_std(values: &[f64]) -> (f64, f64) {
+    let n = values.len() as f64;
+    if values.is_empty() {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = values.iter().sum::<f64>() / n;
+    let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    (mean, var.sqrt())
+}
+
+/// The gait optimized at a fixed design, warm-started from `initial` (a gait of another design):
+/// the cost-of-transport solve on the robot generated at `lengths_m`.
+pub fn fixed_design(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    lengths_m: [f64; 2],
+) -> std::result::Result<SweepOutcome, String> {
+    let run = || -> Result<SweepOutcome> {
+        let (model, urdf) = generate(lengths_m)?;
+        let biped = PlanarBiped::new(model, config.gait.stance_leg, &[])?;
+        let problem = HzdProblem::new(biped, config.clone(), initial.x.clone(), true)?;
+        let (x, report) = plan::solve_stage(&problem, "fixed design", config, &mut |_| {})?;
+        let g = plan::gait_from_solution(
+            &problem,
+            &x,
+            "robot.urdf",
+            &urdf,
+            std::slice::from_ref(&report),
+        )?;
+        Ok(SweepOutcome {
+            lengths_m,
+            step_length_m: g.step_length_m,
+            step_duration_s: g.step_duration_s,
+            speed_mps: g.speed_mps,
+            cost_of_transport: g.cost_of_transport,
+            iterations: report.iterations,
+            solve_time_s: report.solve_time_s,
+        })
+    };
+    run().map_err(|e| e.to_string())
+}
+
+/// [`fixed_design`] for several designs, in parallel.
+pub fn compare_fixed_designs(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    designs: &[[f64; 2]],
+) -> Vec<std::result::Result<SweepOutcome, String>> {
+    use rayon::prelude::*;
+    designs
+        .par_iter()
+        .map(|&d| fixed_design(config, initial, d))
+        .collect()
+}

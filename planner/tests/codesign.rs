@@ -1,0 +1,169 @@
+//! Co-design: the problem with the thigh and shin lengths as variables has exact derivatives,
+//! and its inertias follow the lengths like GenerateModel's.
+
+use model::design::{generate_model, DesignLengths};
+use planner::biped::PlanarBiped;
+use planner::collocation::{Codesign, HzdProblem};
+use planner::config::PlannerConfig;
+use planner::guess::initial_guess;
+use planner::nlp::check::check_derivatives;
+use planner::nlp::NlpProblem;
+
+const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/planner/adam.toml");
+
+fn problem(exact: bool, with_cost: bool) -> (HzdProblem, Vec<f64>) {
+    let config = PlannerConfig::load(CONFIG).expect("config");
+    let (model, _) = generate_model(&DesignLengths::ADAM).expect("model");
+    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
+    let spec = Codesign {
+        nominal_m: [0.24, 0.25],
+        bounds_m: [[0.15, 0.35], [0.15, 0.35]],
+        exact_inertia: exact,
+    };
+    let probe = HzdProblem::with_codesign(
+        bp.clone(),
+        config.clone(),
+        Vec::new(),
+        with_cost,
+        Some(spec.clone()),
+    )
+    .expect("problem");
+    let l = &probe.layout;
+    let mut x = initial_guess(&bp, l, 0.25, 0.75).expect("guess");
+    // Lengths away from the nominal ones, so the design joints are not at zero.
+    x.truncate(l.design_var(0));
+    x.extend([0.27, 0.21]);
+    let p =
+        HzdProblem::with_codesign(bp, config, x.clone(), with_cost, Some(spec)).expect("problem");
+    (p, x)
+}
+
+#[test]
+fn codesign_derivatives_match_finite_differences() {
+    for exact in [false, true] {
+        for with_cost in [false, true] {
+            let (p, x) = problem(exact, with_cost);
+            let m = p.num_constraints();
+            let lambda: Vec<f64> = (0..m)
+                .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
+                .collect();
+            let r = check_derivatives(&p, &x, 0.7, &lambda).expect("evaluates");
+            println!("exact {exact} with_cost {with_cost}: {r:?}");
+            assert!(r.max_gradient_error < 1e-6, "{r:?}");
+            assert!(r.max_jacobian_error < 1e-6, "{r:?}");
+            assert!(r.max_hessian_error < 1e-5, "{r:?}");
+            assert_eq!(r.jacobian_entries_outside_pattern, 0);
+            assert_eq!(r.hessian_entries_outside_pattern, 0);
+        }
+    }
+}
+
+/// The two lengths are variables of every model-dependent constraint: the Jacobian has entries
+/// in their columns, and changing them changes the dynamics residuals (exact coupling changes
+/// them more: the inertias move too).
+#[test]
+fn lengths_enter_the_constraints_and_exact_coupling_moves_the_inertias() {
+    let (frozen, x) = problem(false, true);
+    let (exact, _) = problem(true, true);
+    let l = &frozen.layout;
+    let cols = frozen.jacobian_structure().cols;
+    for i in 0..2 {
+        let n = cols.iter().filter(|&&c| c == l.design_var(i)).count();
+        assert!(n > 100, "design variable {i} in {n} Jacobian entries");
+    }
+    let mut g_frozen = vec![0.0; frozen.num_constraints()];
+    let mut g_exact = vec![0.0; exact.num_constraints()];
+    frozen.constraints(&x, &mut g_frozen).expect("evaluates");
+    exact.constraints(&x, &mut g_exact).expect("evaluates");
+    let diff = g_frozen
+        .iter()
+        .zip(&g_exact)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    // At 0.27/0.21 m instead of 0.24/0.25 m the thigh and shin masses differ by tens of grams:
+    // the dynamics residuals must see it.
+    assert!(
+        diff > 1e-3,
+        "frozen vs exact inertia: max residual difference {diff}"
+    );
+}
+
+/// Exact coupling is self-consistent with GenerateModel: at the lengths a model was generated
+/// for, the fitted inertias inside the NLP are that model's (up to the URDF's printed digits).
+#[test]
+fn exact_inertias_at_the_model_lengths_equal_the_generated_model() {
+    let (frozen, mut x) = problem(false, true);
+    let (exact, _) = problem(true, true);
+    let l = &frozen.layout;
+    x[l.design_var(0)] = 0.24;
+    x[l.design_var(1)] = 0.25;
+    let mut g_frozen = vec![0.0; frozen.num_constraints()];
+    let mut g_exact = vec![0.0; exact.num_constraints()];
+    frozen.constraints(&x, &mut g_frozen).expect("evaluates");
+    exact.constraints(&x, &mut g_exact).expect("evaluates");
+    let diff = g_frozen
+        .iter()
+        .zip(&g_exact)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    // The URDF prints masses and inertias to 6 significant digits: residuals (N·m, N) agree to
+    // about 1e-5 of their size.
+    assert!(
+        diff < 1e-4,
+        "frozen vs exact at the model's own lengths: {diff}"
+    );
+}
+
+/// End to end, both couplings from one warm start (the gait planned at the ADAM lengths):
+/// lengths inside Table I, left = right by construction, a cost of transport no worse than the
+/// fixed design's, Alg. 1 converged to δ, and the co-designed gait verified stable on its URDF.
+#[test]
+fn codesign_lowers_the_cost_of_transport_and_verifies_with_both_couplings() {
+    use planner::config::InertiaCoupling;
+    let mut config = PlannerConfig::load(CONFIG).expect("config");
+    let (model, urdf) = generate_model(&DesignLengths::ADAM).expect("model");
+    let initial =
+        planner::plan::plan_gait(&model, "r.urdf", &urdf, &config, &mut |_| {}).expect("plan");
+    let fixed_cot = initial.gait.cost_of_transport;
+    for coupling in [InertiaCoupling::Exact, InertiaCoupling::Alg1] {
+        config.codesign.inertia = coupling;
+        let r = planner::codesign::codesign_from(
+            &config,
+            "r.urdf",
+            &initial,
+            [0.24, 0.25],
+            [0.24, 0.25],
+            &mut |_| {},
+        )
+        .expect("co-design");
+        let d = r.design;
+        println!(
+            "{coupling:?}: thigh {:.4} m, shin {:.4} m, CoT {:.5} (fixed design {fixed_cot:.5}), {} solves, {:.1} s",
+            d.thigh_length_m,
+            d.shin_length_m,
+            r.planned.gait.cost_of_transport,
+            r.outer.len(),
+            r.wall_time_s
+        );
+        for len in [d.thigh_length_m, d.shin_length_m] {
+            assert!((0.15 - 1e-6..=0.35 + 1e-6).contains(&len), "{len}");
+        }
+        assert!(r.converged, "{:?}", r.outer);
+        assert!(
+            r.planned.gait.cost_of_transport <= fixed_cot * (1.0 + 1e-6),
+            "co-designed {} vs fixed {fixed_cot}",
+            r.planned.gait.cost_of_transport
+        );
+        // The gait file names the co-designed design and verifies on that robot.
+        assert!((r.planned.gait.design.thigh_length_m - d.thigh_length_m).abs() < 1e-6);
+        let robot = model::PlanarModel::from_urdf_str(&r.urdf, "r.urdf").expect("URDF loads");
+        let report = planner::verify::verify_gait(
+            &robot,
+            &r.planned.gait,
+            planner::verify::VerifyOptions::default(),
+        )
+        .expect("verifies");
+        println!("{report}");
+        assert!(report.passed(1e-6), "{report}");
+    }
+}
