@@ -61,11 +61,6 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
     },
-    /// Run logs (MCAP): `adam logs info <run.mcap>`.
-    Logs {
-        #[command(subcommand)]
-        what: LogsWhat,
-    },
     /// Figures from run logs: `adam plot portrait <run.mcap> [--compare <other.mcap>]`.
     Plot {
         #[command(subcommand)]
@@ -129,6 +124,11 @@ enum Command {
         #[command(subcommand)]
         command: GaitCommand,
     },
+    /// MCAP logs: `adam logs info <run.mcap>`, `adam logs recover <in.mcap> [--out <out.mcap>]`.
+    Logs {
+        #[command(subcommand)]
+        command: LogsCommand,
+    },
     /// Write the URDF of ADAM for a design (GenerateModel: inertias from the cubic fits).
     GenerateUrdf {
         /// Thigh length, m.
@@ -153,6 +153,24 @@ enum GaitCommand {
         /// ε of the output controller, 1/s.
         #[arg(long, default_value_t = 10.0)]
         epsilon: f64,
+    },
+}
+
+#[derive(Subcommand)]
+enum LogsCommand {
+    /// Channels, message counts, duration, drops, safety trips, gait and design of a log.
+    Info {
+        /// The log.
+        log: PathBuf,
+    },
+    /// Rewrite a log cut off by a crash with summary and indexes: every message up to the last
+    /// complete chunk.
+    Recover {
+        /// The cut-off log.
+        log: PathBuf,
+        /// Output (default: `<log stem>.recovered.mcap` beside the input).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
 }
 
@@ -313,15 +331,6 @@ fn show_model(urdf: &PathBuf, design: Option<&str>) -> Result<()> {
     }
     print!("{}", robot.summary(&q)?);
     Ok(())
-}
-
-#[derive(Subcommand)]
-enum LogsWhat {
-    /// Channels, message counts, time span, drops, safety events, gait and design used.
-    Info {
-        /// The log.
-        log: PathBuf,
-    },
 }
 
 #[derive(Subcommand)]
@@ -868,6 +877,32 @@ fn run(cli: Cli) -> Result<()> {
         Command::Gait {
             command: GaitCommand::Check { gait, epsilon },
         } => gait_check(&gait, epsilon),
+        Command::Logs {
+            command: LogsCommand::Info { log },
+        } => {
+            print!("{}", runtime::log_read::read_info(&log)?);
+            Ok(())
+        }
+        Command::Logs {
+            command: LogsCommand::Recover { log, out },
+        } => {
+            let out = out.unwrap_or_else(|| log.with_extension("recovered.mcap"));
+            let stats = runtime::log_read::recover(&log, &out)?;
+            println!(
+                "{} -> {}: {} messages, {} attachments, {} metadata records{}",
+                log.display(),
+                out.display(),
+                stats.messages,
+                stats.attachments,
+                stats.metadata,
+                if stats.input_complete {
+                    " (the input was complete already)"
+                } else {
+                    ""
+                }
+            );
+            Ok(())
+        }
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
         Command::Bench {
             what:
@@ -877,12 +912,6 @@ fn run(cli: Cli) -> Result<()> {
                     config,
                 },
         } => bench_plan(runs, &robot, &config),
-        Command::Logs {
-            what: LogsWhat::Info { log },
-        } => {
-            println!("{}", runtime::log_read::info(&log)?);
-            Ok(())
-        }
         Command::Plot {
             what: PlotWhat::Portrait { log, compare, out },
         } => {

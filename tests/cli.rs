@@ -142,11 +142,11 @@ fn logs_info_and_phase_portraits_read_a_run_log() {
     let (ok, out, err) = adam(&["logs", "info", &log_s]);
     assert!(ok, "{out}\n{err}");
     assert!(
-        out.contains("/joints") && out.contains("2000 messages"),
+        out.contains("/joints") && out.contains("2000 msgs"),
         "{out}"
     );
     assert!(
-        out.contains("dropped=0") && out.contains("gait: robot adam_planar"),
+        out.contains("dropped   0 records") && out.contains("robot adam_planar"),
         "{out}"
     );
     let prefix = dir.join("portrait");

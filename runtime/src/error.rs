@@ -55,6 +55,18 @@ pub enum RuntimeError {
     /// The robot backend needs a torso IMU driver, and none exists yet.
     #[error("no IMU driver for the robot's torso IMU yet: the CAN buses opened, but the loop needs pitch and pitch rate")]
     NoImuDriver,
+    /// A log was written with another channel layout than this build reads.
+    #[error("MCAP log {path}: channel `{channel}` has log schema version {found}, this build reads version {expected}: open it with the adam version that wrote it")]
+    LogSchemaVersion {
+        /// The log.
+        path: PathBuf,
+        /// The channel topic.
+        channel: String,
+        /// The version found (`none` when the channel carries none).
+        found: String,
+        /// The version this build reads.
+        expected: u32,
+    },
     /// The MCAP writer failed.
     #[error("MCAP log {path}: {message}")]
     Log {

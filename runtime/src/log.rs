@@ -91,6 +91,14 @@ pub struct Logger {
     handle: JoinHandle<Result<LogStats>>,
 }
 
+/// Version of the channel layout and message fields written here. Every channel carries it as
+/// channel metadata `adam_log_schema`; readers (`runtime::log_read`) refuse any other version
+/// instead of misreading it. Bump it whenever a field changes meaning or disappears.
+pub const LOG_SCHEMA_VERSION: u32 = 1;
+
+/// Channel metadata key holding [`LOG_SCHEMA_VERSION`].
+pub const SCHEMA_VERSION_KEY: &str = "adam_log_schema";
+
 /// Names of the logged channels.
 pub const CHANNELS: [&str; 6] = [
     "/joints",
@@ -338,7 +346,11 @@ impl Channels {
         let mut add = |topic: &str, schema_name: &str, schema: &Value| {
             let text = serde_json::to_vec(schema).unwrap_or_default();
             let sid = w.add_schema(schema_name, "jsonschema", &text)?;
-            w.add_channel(sid, topic, "json", &BTreeMap::new())
+            let meta = BTreeMap::from([(
+                SCHEMA_VERSION_KEY.to_string(),
+                LOG_SCHEMA_VERSION.to_string(),
+            )]);
+            w.add_channel(sid, topic, "json", &meta)
         };
         Ok(Self {
             joints: add(CHANNELS[0], "adam.Joints", &joints)?,
