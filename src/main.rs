@@ -61,7 +61,8 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
     },
-    /// Figures from run logs: `adam plot portrait <run.mcap> [--compare <other.mcap>]`.
+    /// Figures from run logs: `adam plot portrait <run.mcap> [--compare <other.mcap>]`,
+    /// `adam plot tiles <run.mcap>`.
     Plot {
         #[command(subcommand)]
         what: PlotWhat,
@@ -128,6 +129,17 @@ enum Command {
     Logs {
         #[command(subcommand)]
         command: LogsCommand,
+    },
+    /// Replay a log through this build's controller and compare every command with the logged
+    /// one: bit-identical, or the first divergence (exit code 1). `--mint <dir>` instead records
+    /// the replay fixtures (`tests/fixtures`) anew.
+    Replay {
+        /// The log(s) to replay.
+        #[arg(required_unless_present = "mint")]
+        logs: Vec<PathBuf>,
+        /// Record the replay fixtures into this folder (after an intended controller change).
+        #[arg(long, conflicts_with = "logs")]
+        mint: Option<PathBuf>,
     },
     /// Write the URDF of ADAM for a design (GenerateModel: inertias from the cubic fits).
     GenerateUrdf {
@@ -343,6 +355,18 @@ enum PlotWhat {
         #[arg(long)]
         compare: Option<PathBuf>,
         /// Output prefix (default: the log's path without extension, + `-portrait`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Gait tiles, like the paper's Fig. 5: stick figures at evenly spaced phases of one step
+    /// of a logged walk, as PNG and SVG.
+    Tiles {
+        /// The run (a walk of at least two steps).
+        log: PathBuf,
+        /// Number of figures (phases 0, 1/(n−1), …, 1).
+        #[arg(long, default_value_t = 8)]
+        count: usize,
+        /// Output prefix (default: the log's path without extension, + `-tiles`).
         #[arg(long)]
         out: Option<PathBuf>,
     },
@@ -807,6 +831,37 @@ fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
     Ok(())
 }
 
+/// `dir/stem.ext` → `dir/stem<suffix>` (an output prefix beside an input file).
+fn with_suffix(path: &std::path::Path, suffix: &str) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}{suffix}"))
+}
+
+fn replay(logs: &[PathBuf], mint: Option<&std::path::Path>) -> Result<()> {
+    if let Some(dir) = mint {
+        let setup = runtime::Setup::load("configs/runtime/adam.toml", runtime::DEFAULT_GAIT)?;
+        let paths = runtime::replay::mint_fixtures(&setup, dir)?;
+        for (path, (_, what)) in paths.iter().zip(runtime::replay::FIXTURES) {
+            let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+            println!("wrote {} ({bytes} bytes): {what}", path.display());
+        }
+        return Ok(());
+    }
+    let mut diverged = 0;
+    for log in logs {
+        let report = runtime::replay::replay(log)?;
+        print!("{report}");
+        diverged += usize::from(report.divergence.is_some());
+    }
+    if diverged > 0 {
+        bail!("{diverged} of {} log(s) diverged", logs.len());
+    }
+    Ok(())
+}
+
 fn demo() -> Result<()> {
     let gait = PathBuf::from(runtime::DEFAULT_GAIT);
     let config = PathBuf::from("configs/runtime/adam.toml");
@@ -903,6 +958,7 @@ fn run(cli: Cli) -> Result<()> {
             );
             Ok(())
         }
+        Command::Replay { logs, mint } => replay(&logs, mint.as_deref()),
         Command::Model { urdf, design } => show_model(&urdf, design.as_deref()),
         Command::Bench {
             what:
@@ -930,16 +986,31 @@ fn run(cli: Cli) -> Result<()> {
                     series: b,
                 });
             }
-            let prefix = out.unwrap_or_else(|| {
-                let stem = log
-                    .file_stem()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                log.with_file_name(format!("{stem}-portrait"))
-            });
+            let prefix = out.unwrap_or_else(|| with_suffix(&log, "-portrait"));
             plots::portraits(&prefix, &runs)?;
             println!(
                 "wrote {} and {}",
+                prefix.with_extension("png").display(),
+                prefix.with_extension("svg").display()
+            );
+            Ok(())
+        }
+        Command::Plot {
+            what: PlotWhat::Tiles { log, count, out },
+        } => {
+            let tiles = runtime::tiles::gait_tiles(&log, count)?;
+            let prefix = out.unwrap_or_else(|| with_suffix(&log, "-tiles"));
+            let name = log
+                .file_name()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            plots::tiles(&prefix, &tiles, &name)?;
+            println!(
+                "step {} ({:.3} m in {:.3} s), {} figures: wrote {} and {}",
+                tiles.step,
+                tiles.step_length_m,
+                tiles.step_duration_s,
+                tiles.figures.len(),
                 prefix.with_extension("png").display(),
                 prefix.with_extension("svg").display()
             );

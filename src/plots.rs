@@ -239,3 +239,147 @@ where
     }
     Ok(())
 }
+
+/// The paper's Fig. 5: stick figures of one step at evenly spaced phases, side by side, as
+/// `<prefix>.png` and `<prefix>.svg`; `source` names the log in the caption.
+pub fn tiles(prefix: &Path, tiles: &runtime::tiles::GaitTiles, source: &str) -> Result<()> {
+    register_font()?;
+    let png = prefix.with_extension("png");
+    let svg = prefix.with_extension("svg");
+    let size = tiles_size(tiles);
+    {
+        let root = BitMapBackend::new(&png, size).into_drawing_area();
+        draw_tiles(&root, tiles, source)?;
+        root.present()
+            .map_err(|e| anyhow!("{}: {e}", png.display()))?;
+    }
+    {
+        let root = SVGBackend::new(&svg, size).into_drawing_area();
+        draw_tiles(&root, tiles, source)?;
+        root.present()
+            .map_err(|e| anyhow!("{}: {e}", svg.display()))?;
+    }
+    Ok(())
+}
+
+/// Horizontal distance between tiles, and the x and z ranges of the figure, m.
+fn tiles_frame(tiles: &runtime::tiles::GaitTiles) -> (f64, (f64, f64), (f64, f64)) {
+    let (mut xmin, mut xmax, mut zmax) = (0.0f64, 0.0f64, 0.0f64);
+    for f in &tiles.figures {
+        for p in f
+            .torso_m
+            .iter()
+            .chain(&f.stance_leg_m)
+            .chain(&f.swing_leg_m)
+        {
+            xmin = xmin.min(p[0]);
+            xmax = xmax.max(p[0]);
+            zmax = zmax.max(p[1]);
+        }
+    }
+    let spacing = (xmax - xmin) + 0.15;
+    let n = tiles.figures.len() as f64;
+    // Room on the right for the legend.
+    (
+        spacing,
+        (
+            xmin - 0.08,
+            xmin + (n - 1.0) * spacing + (xmax - xmin) + 0.45,
+        ),
+        (-0.06, zmax + 0.12),
+    )
+}
+
+fn tiles_size(tiles: &runtime::tiles::GaitTiles) -> (u32, u32) {
+    let (_, x, z) = tiles_frame(tiles);
+    // Equal scale on both axes: the plot area is 480 px tall, plus margins and labels.
+    let px_per_m = 480.0 / (z.1 - z.0);
+    (((x.1 - x.0) * px_per_m) as u32 + 110, 480 + 130)
+}
+
+fn draw_tiles<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    tiles: &runtime::tiles::GaitTiles,
+    source: &str,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e:?}");
+    root.fill(&WHITE).map_err(err)?;
+    let (spacing, x, z) = tiles_frame(tiles);
+    let caption = format!(
+        "Gait tiles: {} (thigh {:.3} m, shin {:.3} m), step {} of {}: {:.3} m in {:.3} s",
+        tiles.robot,
+        tiles.design_m.0,
+        tiles.design_m.1,
+        tiles.step,
+        source,
+        tiles.step_length_m,
+        tiles.step_duration_s
+    );
+    let mut chart = ChartBuilder::on(root)
+        .caption(caption, ("sans-serif", 16))
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(x.0..x.1, z.0..z.1)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .x_desc("x (m), each tile offset by its index")
+        .y_desc("z (m)")
+        .label_style(("sans-serif", 12))
+        .axis_desc_style(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    chart
+        .draw_series(LineSeries::new([(x.0, 0.0), (x.1, 0.0)], BLACK.mix(0.5)))
+        .map_err(err)?;
+    let stance_color = RGBColor(31, 119, 180);
+    let swing_color = RGBColor(214, 39, 40);
+    let torso_color = RGBColor(60, 60, 60);
+    for (k, f) in tiles.figures.iter().enumerate() {
+        let dx = k as f64 * spacing;
+        let at = |p: &[f64; 2]| (p[0] + dx, p[1]);
+        for (points, color, label) in [
+            (&f.swing_leg_m[..], swing_color, "swing leg"),
+            (&f.torso_m[..], torso_color, "torso"),
+            (&f.stance_leg_m[..], stance_color, "stance leg"),
+        ] {
+            let series = chart
+                .draw_series(LineSeries::new(
+                    points.iter().map(at),
+                    color.stroke_width(4),
+                ))
+                .map_err(err)?;
+            if k == 0 {
+                series.label(label).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(4))
+                });
+            }
+            chart
+                .draw_series(points.iter().map(|p| Circle::new(at(p), 3, color.filled())))
+                .map_err(err)?;
+        }
+        let top = f.torso_m[1][1].max(f.torso_m[0][1]);
+        chart
+            .draw_series([Text::new(
+                format!("τ = {:.2}", f.phase),
+                (f.torso_m[0][0] + dx - 0.06, top + 0.08),
+                ("sans-serif", 14),
+            )])
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", 13))
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerRight)
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}

@@ -173,5 +173,70 @@ fn logs_info_and_phase_portraits_read_a_run_log() {
     );
     let (ok, _, err) = adam(&["logs", "info", "Cargo.toml"]);
     assert!(!ok && err.contains("Cargo.toml"), "{err}");
+
+    // The same log replays bit for bit through this build's controller.
+    let (ok, out, err) = adam(&["replay", &log_s]);
+    assert!(ok, "{out}\n{err}");
+    assert!(
+        out.contains("ticks      2000") && out.contains("bit-identical"),
+        "{out}"
+    );
+    // Gait tiles of its middle complete step.
+    let tiles = dir.join("tiles");
+    let (ok, out, err) = adam(&[
+        "plot",
+        "tiles",
+        &log_s,
+        "--count",
+        "6",
+        "--out",
+        &tiles.display().to_string(),
+    ]);
+    assert!(ok, "{out}\n{err}");
+    assert!(
+        out.contains("step 1 (") && out.contains("6 figures"),
+        "{out}"
+    );
+    let svg = std::fs::read_to_string(tiles.with_extension("svg")).expect("svg");
+    assert!(
+        svg.contains("Gait tiles") && svg.contains("τ = 1.00") && svg.contains("stance leg"),
+        "captions, phases and legend"
+    );
+    assert!(
+        std::fs::metadata(tiles.with_extension("png"))
+            .expect("png")
+            .len()
+            > 10_000
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn replay_mints_fixtures_that_replay_and_names_a_bad_log() {
+    let dir = std::env::temp_dir().join(format!("adam-cli-replay-{}", std::process::id()));
+    let dir_s = dir.display().to_string();
+    let (ok, out, err) = adam(&["replay", "--mint", &dir_s]);
+    assert!(ok, "{out}\n{err}");
+    assert_eq!(out.matches("wrote ").count(), 3, "{out}");
+    let logs: Vec<String> = ["walk.mcap", "state_machine.mcap", "estop.mcap"]
+        .iter()
+        .map(|n| dir.join(n).display().to_string())
+        .collect();
+    let mut args = vec!["replay"];
+    args.extend(logs.iter().map(String::as_str));
+    let (ok, out, err) = adam(&args);
+    assert!(ok, "{out}\n{err}");
+    assert_eq!(out.matches("bit-identical").count(), 3, "{out}");
+    assert!(
+        out.contains("idle → ramp → stand → walk → stop → damping → idle"),
+        "{out}"
+    );
+    let (ok, _, err) = adam(&["replay", "Cargo.toml"]);
+    assert!(
+        !ok && err.contains("Cargo.toml") && err.contains("not an MCAP file"),
+        "{err}"
+    );
+    let (ok, _, err) = adam(&["replay"]);
+    assert!(!ok && err.contains("<LOGS>"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }

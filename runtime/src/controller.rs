@@ -73,6 +73,35 @@ pub enum OperatorCommand {
     EStop,
 }
 
+impl OperatorCommand {
+    /// Every command, in declaration order.
+    pub const ALL: [OperatorCommand; 6] = [
+        OperatorCommand::Start,
+        OperatorCommand::Walk,
+        OperatorCommand::Stop,
+        OperatorCommand::Damp,
+        OperatorCommand::Reset,
+        OperatorCommand::EStop,
+    ];
+
+    /// Name for logs (`start`, `walk`, `stop`, `damp`, `reset`, `estop`).
+    pub fn name(self) -> &'static str {
+        match self {
+            OperatorCommand::Start => "start",
+            OperatorCommand::Walk => "walk",
+            OperatorCommand::Stop => "stop",
+            OperatorCommand::Damp => "damp",
+            OperatorCommand::Reset => "reset",
+            OperatorCommand::EStop => "estop",
+        }
+    }
+
+    /// The command of a [`OperatorCommand::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+}
+
 /// State of the controller's state machine.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(u32)]
@@ -166,7 +195,7 @@ impl JointCommand {
 }
 
 /// Everything the controller reads in one tick.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TickInput {
     /// Controller time, s.
     pub t_s: f64,
@@ -309,6 +338,12 @@ impl SlotLayout {
             l.held_kd[s] = h.kd_nm_s_per_rad;
         }
         l
+    }
+
+    /// Whether any held motor is driven (the `with_held` this layout was made with, for a
+    /// config that has held joints).
+    pub fn with_held(&self) -> bool {
+        self.present[LEG_SLOTS..].iter().any(|&p| p)
     }
 }
 

@@ -16,6 +16,9 @@
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
 //! | [`telemetry`] | `#[repr(C)]` [`telemetry::StateSample`], published over iceoryx2 (feature `iceoryx2`, default) |
 //! | [`log`] | MCAP writer thread fed by a wait-free queue; drops counted |
+//! | [`log_read`] | reading logs back: `adam logs info\|recover`, joint series |
+//! | [`replay`] | deterministic replay of a log through the controller (`adam replay`), fixtures |
+//! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
 //! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth |
 //!
@@ -65,12 +68,14 @@ pub mod io;
 pub mod log;
 pub mod log_read;
 pub mod operator;
+pub mod replay;
 pub mod robot;
 pub mod rt_loop;
 mod rt_sys;
 pub mod safety;
 pub mod sim_run;
 pub mod telemetry;
+pub mod tiles;
 
 pub use error::{Result, RuntimeError};
 pub use io::{Imu, ImuSample};
@@ -89,6 +94,8 @@ pub struct Setup {
     pub gait: model::gait::GaitFile,
     /// The robot model the gait was planned for.
     pub model: model::PlanarModel,
+    /// The URDF text of that model (attached to every log, so a log replays on its own).
+    pub urdf_text: String,
 }
 
 impl Setup {
@@ -109,21 +116,32 @@ impl Setup {
             path: urdf_path.clone(),
             error,
         })?;
-        let sha = model::gait::sha256_hex(&text);
+        Self::from_parts(config, gait, text, &urdf_path.display().to_string())
+    }
+
+    /// A setup from an already-parsed config and gait and the URDF text the gait names
+    /// (`urdf_origin` names that text in errors), checking the URDF's SHA-256 against the gait.
+    pub fn from_parts(
+        config: config::RuntimeConfig,
+        gait: model::gait::GaitFile,
+        urdf_text: String,
+        urdf_origin: &str,
+    ) -> Result<Self> {
+        let sha = model::gait::sha256_hex(&urdf_text);
         if sha != gait.robot.sha256 {
             return Err(RuntimeError::Gait {
                 reason: format!(
-                    "{} has SHA-256 {sha}, the gait was planned for {}",
-                    urdf_path.display(),
+                    "{urdf_origin} has SHA-256 {sha}, the gait was planned for {}",
                     gait.robot.sha256
                 ),
             });
         }
-        let model = model::PlanarModel::from_urdf_file(&urdf_path)?;
+        let model = model::PlanarModel::from_urdf_str(&urdf_text, urdf_origin)?;
         Ok(Self {
             config,
             gait,
             model,
+            urdf_text,
         })
     }
 

@@ -9,11 +9,19 @@
 //! `/joints` (per joint q, dq, τ, temperature, commanded q, dq, τ), `/hzd` (phase, τ̇, stance,
 //! steps, desired/actual outputs), `/estimator` (pitch, rate, gyro bias, raw IMU), `/state`
 //! (state, trip, overruns, tick compute time), `/safety` (one message per trip, with its
-//! values), `/transitions` (state changes). The gait file and the runtime config are attached;
-//! metadata `run` describes the run and `log_stats` counts written and dropped records.
+//! values), `/transitions` (state changes), and for replay (`adam replay`, [`crate::replay`])
+//! `/input` (everything the controller read in a tick: time, motor replies, IMU sample,
+//! operator command, overrun streak) and `/command` (every command it wrote, and its state),
+//! both every tick whatever `log_every_n_ticks` says. Floats in `/input` and `/command` are
+//! written in shortest round-trip form and read back bit for bit (serde_json
+//! `float_roundtrip`); non-finite values are the strings `"NaN"`, `"inf"`, `"-inf"`.
+//! The gait file, the runtime config and the robot's URDF are attached, so a log replays on
+//! its own; metadata `run` describes the run (including `start_walking` and `with_held`,
+//! which replay needs) and `log_stats` counts written and dropped records.
 
-use crate::config::RuntimeConfig;
-use crate::controller::{ControlState, SlotLayout, OUTPUTS, SLOTS};
+use crate::controller::{
+    CommandMode, ControlState, JointCommand, SlotLayout, TickInput, OUTPUTS, SLOTS,
+};
 use crate::safety::Trip;
 use crate::telemetry::StateSample;
 use crate::{Result, RuntimeError};
@@ -41,6 +49,8 @@ pub enum LogRecord {
         /// The trip.
         trip: Trip,
     },
+    /// The controller's whole input and output of one tick (for replay).
+    Tick(TickRecord),
     /// A state change.
     Transition {
         /// Time, s.
@@ -50,6 +60,19 @@ pub enum LogRecord {
         /// To.
         to: ControlState,
     },
+}
+
+/// One tick as the controller saw it: what it read and what it commanded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TickRecord {
+    /// Tick counter.
+    pub tick: u64,
+    /// The controller's input.
+    pub input: TickInput,
+    /// Its commands by slot.
+    pub commands: [JointCommand; SLOTS],
+    /// Its state after the tick.
+    pub state: ControlState,
 }
 
 /// The control thread's end: never blocks, never allocates.
@@ -100,14 +123,19 @@ pub const LOG_SCHEMA_VERSION: u32 = 1;
 pub const SCHEMA_VERSION_KEY: &str = "adam_log_schema";
 
 /// Names of the logged channels.
-pub const CHANNELS: [&str; 6] = [
+pub const CHANNELS: [&str; 8] = [
     "/joints",
     "/hzd",
     "/estimator",
     "/state",
     "/safety",
     "/transitions",
+    "/input",
+    "/command",
 ];
+
+/// Attachment names: the gait file, the runtime config, the robot's URDF.
+pub const ATTACHMENTS: [&str; 3] = ["gait.json", "runtime.toml", "robot.urdf"];
 
 /// What the log describes besides the records.
 #[derive(Clone, Debug)]
@@ -120,6 +148,8 @@ pub struct LogContext {
     pub gait_json: String,
     /// Runtime config TOML (attachment).
     pub config_toml: String,
+    /// The robot's URDF (attachment).
+    pub urdf_text: String,
     /// Free-form run metadata.
     pub metadata: BTreeMap<String, String>,
     /// Compress chunks with zstd.
@@ -127,8 +157,9 @@ pub struct LogContext {
 }
 
 impl LogContext {
-    /// The context of a run of `gait` with `config` and this slot layout.
-    pub fn new(config: &RuntimeConfig, gait: &model::gait::GaitFile, layout: &SlotLayout) -> Self {
+    /// The context of a run of `setup` with this slot layout.
+    pub fn new(setup: &crate::Setup, layout: &SlotLayout) -> Self {
+        let (config, gait) = (&setup.config, &setup.gait);
         let mut joint_names: [Option<String>; SLOTS] = Default::default();
         for (slot, name) in joint_names.iter_mut().enumerate() {
             if !layout.present[slot] {
@@ -153,11 +184,13 @@ impl LogContext {
         metadata.insert("rate_hz".into(), config.loop_.rate_hz.to_string());
         metadata.insert("phase".into(), format!("{:?}", config.walk.phase));
         metadata.insert("runtime_version".into(), env!("CARGO_PKG_VERSION").into());
+        metadata.insert("with_held".into(), layout.with_held().to_string());
         Self {
             joint_names,
             output_names,
             gait_json: serde_json::to_string_pretty(gait).unwrap_or_default(),
             config_toml: config.to_toml(),
+            urdf_text: setup.urdf_text.clone(),
             metadata,
             zstd: config.telemetry.log_zstd,
         }
@@ -193,14 +226,19 @@ pub fn start(
     let ids = Channels::add(&mut writer, &context).map_err(|e| log_err(&path, e))?;
     for (name, media, data) in [
         (
-            "gait.json",
+            ATTACHMENTS[0],
             "application/json",
             context.gait_json.as_bytes(),
         ),
         (
-            "runtime.toml",
+            ATTACHMENTS[1],
             "application/toml",
             context.config_toml.as_bytes(),
+        ),
+        (
+            ATTACHMENTS[2],
+            "application/xml",
+            context.urdf_text.as_bytes(),
         ),
     ] {
         writer
@@ -301,6 +339,8 @@ struct Channels {
     state: u16,
     safety: u16,
     transitions: u16,
+    input: u16,
+    command: u16,
 }
 
 fn number() -> Value {
@@ -343,6 +383,26 @@ impl Channels {
             "code": {"type": "integer"}}, "additionalProperties": true});
         let transitions = json!({"type": "object", "properties": {
             "t_s": number(), "from": {"type": "string"}, "to": {"type": "string"}}});
+        let exact = || json!({"type": ["number", "string"]});
+        let motor = json!({"type": "object", "properties": {
+            "fresh": {"type": "boolean"}, "q_rad": exact(), "dq_rad_s": exact(),
+            "tau_nm": exact(), "temperature_c": exact(), "errors": {"type": "integer"}}});
+        let mut input = object_of(ctx.joint_names.iter().flatten().cloned(), motor);
+        input["properties"]["t_s"] = exact();
+        input["properties"]["tick"] = json!({"type": "integer"});
+        input["properties"]["overrun_streak"] = json!({"type": "integer"});
+        input["properties"]["operator"] = json!({"type": ["string", "null"]});
+        input["properties"]["imu"] = json!({"type": ["object", "null"], "properties": {
+            "t_s": exact(), "gyro_pitch_rad_s": exact(), "accel_x_mps2": exact(),
+            "accel_z_mps2": exact()}});
+        let joint_command = json!({"type": "object", "properties": {
+            "mode": {"type": "string", "enum": ["pd", "damping"]}, "q_des_rad": exact(),
+            "dq_des_rad_s": exact(), "kp_nm_per_rad": exact(), "kd_nm_s_per_rad": exact(),
+            "tau_ff_nm": exact()}});
+        let mut command = object_of(ctx.joint_names.iter().flatten().cloned(), joint_command);
+        command["properties"]["t_s"] = exact();
+        command["properties"]["tick"] = json!({"type": "integer"});
+        command["properties"]["state"] = json!({"type": "string"});
         let mut add = |topic: &str, schema_name: &str, schema: &Value| {
             let text = serde_json::to_vec(schema).unwrap_or_default();
             let sid = w.add_schema(schema_name, "jsonschema", &text)?;
@@ -359,6 +419,8 @@ impl Channels {
             state: add(CHANNELS[3], "adam.State", &state)?,
             safety: add(CHANNELS[4], "adam.SafetyTrip", &safety)?,
             transitions: add(CHANNELS[5], "adam.Transition", &transitions)?,
+            input: add(CHANNELS[6], "adam.TickInput", &input)?,
+            command: add(CHANNELS[7], "adam.TickCommand", &command)?,
         })
     }
 }
@@ -381,6 +443,92 @@ fn side_name(stance: u32) -> &'static str {
     } else {
         "right"
     }
+}
+
+/// A float as JSON that reads back bit for bit: a number, or `"NaN"`, `"inf"`, `"-inf"`.
+pub fn exact_json(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else if x.is_nan() {
+        json!("NaN")
+    } else if x > 0.0 {
+        json!("inf")
+    } else {
+        json!("-inf")
+    }
+}
+
+/// The inverse of [`exact_json`] (`None`: neither a number nor one of the three strings).
+pub fn exact_from_json(v: &Value) -> Option<f64> {
+    match v {
+        Value::Number(n) => n.as_f64(),
+        Value::String(s) => match s.as_str() {
+            "NaN" => Some(f64::NAN),
+            "inf" => Some(f64::INFINITY),
+            "-inf" => Some(f64::NEG_INFINITY),
+            _ => None,
+        },
+        _ => None,
+    }
+}
+
+/// `/input` message of one tick (joints named by slot).
+pub fn input_json(record: &TickRecord, joint_names: &[Option<String>; SLOTS]) -> Value {
+    let input = &record.input;
+    let mut m = Map::new();
+    m.insert("t_s".into(), exact_json(input.t_s));
+    m.insert("tick".into(), json!(record.tick));
+    m.insert("overrun_streak".into(), json!(input.overrun_streak));
+    m.insert(
+        "operator".into(),
+        input.operator.map_or(Value::Null, |c| json!(c.name())),
+    );
+    m.insert(
+        "imu".into(),
+        input.imu.map_or(Value::Null, |i| {
+            json!({
+                "t_s": exact_json(i.t_s), "gyro_pitch_rad_s": exact_json(i.gyro_pitch_rad_s),
+                "accel_x_mps2": exact_json(i.accel_x_mps2),
+                "accel_z_mps2": exact_json(i.accel_z_mps2),
+            })
+        }),
+    );
+    for (slot, name) in joint_names.iter().enumerate() {
+        let Some(name) = name else { continue };
+        let s = &input.motors[slot];
+        m.insert(
+            name.clone(),
+            json!({
+                "fresh": s.fresh, "q_rad": exact_json(s.q_rad),
+                "dq_rad_s": exact_json(s.dq_rad_s), "tau_nm": exact_json(s.tau_nm),
+                "temperature_c": exact_json(s.temperature_c), "errors": s.errors,
+            }),
+        );
+    }
+    Value::Object(m)
+}
+
+/// `/command` message of one tick.
+pub fn command_json(record: &TickRecord, joint_names: &[Option<String>; SLOTS]) -> Value {
+    let mut m = Map::new();
+    m.insert("t_s".into(), exact_json(record.input.t_s));
+    m.insert("tick".into(), json!(record.tick));
+    m.insert("state".into(), json!(record.state.name()));
+    for (slot, name) in joint_names.iter().enumerate() {
+        let Some(name) = name else { continue };
+        let c = &record.commands[slot];
+        m.insert(
+            name.clone(),
+            json!({
+                "mode": match c.mode { CommandMode::Pd => "pd", CommandMode::Damping => "damping" },
+                "q_des_rad": exact_json(c.q_des_rad), "dq_des_rad_s": exact_json(c.dq_des_rad_s),
+                "kp_nm_per_rad": exact_json(c.kp_nm_per_rad),
+                "kd_nm_s_per_rad": exact_json(c.kd_nm_s_per_rad),
+                "tau_ff_nm": exact_json(c.tau_ff_nm),
+            }),
+        );
+    }
+    Value::Object(m)
 }
 
 /// A trip as a JSON object with its reason and values.
@@ -494,6 +642,15 @@ impl<W: std::io::Write + std::io::Seek> RecordWriter<W> {
                 self.put(ids.state, t, &state)?;
                 Ok(4)
             }
+            LogRecord::Tick(record) => {
+                let t = record.input.t_s;
+                let ids = self.ids;
+                let input = input_json(record, &self.context.joint_names);
+                self.put(ids.input, t, &input)?;
+                let command = command_json(record, &self.context.joint_names);
+                self.put(ids.command, t, &command)?;
+                Ok(2)
+            }
             LogRecord::Trip { t_s, tick, trip } => {
                 let mut v = trip_json(trip);
                 v["t_s"] = json!(t_s);
@@ -530,7 +687,7 @@ mod tests {
     fn written_log_rereads_with_the_expected_channels_counts_and_attachments() {
         let setup = Setup::shipped().unwrap();
         let layout = SlotLayout::new(&setup.config, false);
-        let ctx = LogContext::new(&setup.config, &setup.gait, &layout);
+        let ctx = LogContext::new(&setup, &layout);
         let path = temp_path("log");
         let (mut tx, logger) = start(&path, ctx, 64).unwrap();
         let n = 500;
@@ -602,7 +759,7 @@ mod tests {
             .iter()
             .map(|a| a.name.clone())
             .collect();
-        assert_eq!(names, ["gait.json", "runtime.toml"]);
+        assert_eq!(names, ATTACHMENTS);
         let gait = mcap::read::attachment(&bytes, &summary.attachment_indexes[0]).unwrap();
         assert!(
             model::gait::GaitFile::from_json(std::str::from_utf8(&gait.data).unwrap(), "log")
@@ -622,7 +779,7 @@ mod tests {
     fn a_full_queue_drops_and_counts_instead_of_blocking() {
         let setup = Setup::shipped().unwrap();
         let layout = SlotLayout::new(&setup.config, false);
-        let ctx = LogContext::new(&setup.config, &setup.gait, &layout);
+        let ctx = LogContext::new(&setup, &layout);
         let path = temp_path("drops");
         let (mut tx, logger) = start(&path, ctx, 16).unwrap();
         // 10 000 pushes in a burst far outrun a writer that sleeps 2 ms between drains.

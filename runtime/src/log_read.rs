@@ -152,7 +152,7 @@ impl std::fmt::Display for LogInfo {
     }
 }
 
-fn log_err(path: &Path, e: impl std::fmt::Display) -> RuntimeError {
+pub(crate) fn log_err(path: &Path, e: impl std::fmt::Display) -> RuntimeError {
     RuntimeError::Log {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -164,7 +164,7 @@ const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
 /// The file's bytes; a file that does not even start like an MCAP file is an error (a cut-off
 /// log still has its leading magic).
-fn read_bytes(path: &Path) -> Result<Vec<u8>> {
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     let bytes = std::fs::read(path).map_err(|error| RuntimeError::Io {
         path: path.to_path_buf(),
         error,
@@ -190,14 +190,36 @@ pub fn check_schema_version(path: &Path, channel: &mcap::Channel<'_>) -> Result<
 }
 
 /// Top-level records outside chunks: metadata and attachments, up to the first unreadable one.
-struct TopLevel {
-    metadata: Vec<mcap::records::Metadata>,
-    attachments: Vec<(mcap::records::AttachmentHeader, Vec<u8>)>,
-    error: Option<String>,
-    footer: bool,
+pub(crate) struct TopLevel {
+    pub(crate) metadata: Vec<mcap::records::Metadata>,
+    pub(crate) attachments: Vec<(mcap::records::AttachmentHeader, Vec<u8>)>,
+    pub(crate) error: Option<String>,
+    pub(crate) footer: bool,
 }
 
-fn top_level(path: &Path, bytes: &[u8]) -> Result<TopLevel> {
+impl TopLevel {
+    /// The attachment `name` as text, or an error naming the log and the attachment.
+    pub(crate) fn attachment_text(&self, path: &Path, name: &str) -> Result<&str> {
+        let (_, data) = self
+            .attachments
+            .iter()
+            .find(|(h, _)| h.name == name)
+            .ok_or_else(|| log_err(path, format!("no attachment {name}")))?;
+        std::str::from_utf8(data)
+            .map_err(|e| log_err(path, format!("attachment {name} is not UTF-8: {e}")))
+    }
+
+    /// Metadata record `name`, key `key`.
+    pub(crate) fn metadata_value(&self, name: &str, key: &str) -> Option<&str> {
+        self.metadata
+            .iter()
+            .find(|m| m.name == name)
+            .and_then(|m| m.metadata.get(key))
+            .map(String::as_str)
+    }
+}
+
+pub(crate) fn top_level(path: &Path, bytes: &[u8]) -> Result<TopLevel> {
     let reader = mcap::read::LinearReader::new_with_options(
         bytes,
         mcap::read::Options::IgnoreEndMagic.into(),
@@ -492,7 +514,7 @@ mod tests {
     fn write_log(path: &Path, n: u64) {
         let setup = Setup::shipped().unwrap();
         let layout = SlotLayout::new(&setup.config, false);
-        let ctx = LogContext::new(&setup.config, &setup.gait, &layout);
+        let ctx = LogContext::new(&setup, &layout);
         let (mut tx, logger) = start(path, ctx, 4096).unwrap();
         for k in 0..n {
             let mut s = StateSample {
@@ -541,7 +563,7 @@ mod tests {
         let setup = Setup::shipped().unwrap();
         let gait = info.gait.as_ref().unwrap();
         assert_eq!(gait.step_length_m, setup.gait.step_length_m);
-        assert_eq!(info.attachments, ["gait.json", "runtime.toml"]);
+        assert_eq!(info.attachments, crate::log::ATTACHMENTS);
         let text = info.to_string();
         assert!(text.contains("duration  0.299 s"), "{text}");
         std::fs::remove_file(&path).unwrap();

@@ -20,7 +20,7 @@ use crate::controller::{
     TickOutput, LEG_SLOTS, OUTPUTS, SLOTS,
 };
 use crate::io::Imu;
-use crate::log::{LogContext, LogRecord, LogStats};
+use crate::log::{LogContext, LogRecord, LogStats, TickRecord};
 use crate::operator::OperatorReceiver;
 use crate::rt_sys;
 use crate::safety::Trip;
@@ -296,7 +296,7 @@ where
 {
     let controller = setup.controller(options.with_held)?;
     let config = setup.config.clone();
-    let log_context = LogContext::new(&config, &setup.gait, controller.layout());
+    let log_context = LogContext::new(setup, controller.layout());
     std::thread::Builder::new()
         .name("adam-rt".into())
         .spawn(move || {
@@ -326,7 +326,7 @@ where
 pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     mut controller: Controller,
     config: &crate::config::RuntimeConfig,
-    log_context: LogContext,
+    mut log_context: LogContext,
     mut backend: B,
     mut clock: C,
     options: LoopOptions,
@@ -393,6 +393,9 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     } else {
         None
     };
+    log_context
+        .metadata
+        .insert("start_walking".into(), options.start_walking.to_string());
     let (mut log_tx, logger) = match &options.log_path {
         Some(path) => {
             let (tx, logger) =
@@ -512,6 +515,12 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
             }
         }
         if let Some(tx) = log_tx.as_mut() {
+            tx.push(LogRecord::Tick(TickRecord {
+                tick,
+                input,
+                commands: out.commands,
+                state: status.state,
+            }));
             if let Some((from, to)) = status.transition {
                 tx.push(LogRecord::Transition { t_s: t, from, to });
             }

@@ -1,0 +1,275 @@
+//! Gait tiles (the paper's Fig. 5): stick figures of the robot at evenly spaced phases of one
+//! step of a logged walk, for `adam plot tiles <run.mcap>`.
+//!
+//! ```text
+//! run.mcap ─ attachments (runtime.toml, gait.json, robot.urdf) ─▶ model with the gait's design
+//!          ─ /hzd (phase, stance, steps) ┐
+//!          ─ /joints (motor angles)      ├─▶ one complete step ─▶ samples nearest τ = k/(n−1)
+//!          ─ /estimator (pitch)          ┘      ─▶ q (pitch, model joint angles) ─▶ forward kinematics
+//! ```
+//! Joint angles are converted from the motor side to the model side with each leg motor's
+//! `direction` and `offset_rad` from the attached config; the torso pitch is the controller's
+//! estimate (what the robot believed). Positions are relative to the stance foot, which stays
+//! put during a step. The step drawn is the middle one of the complete steps in the log (a
+//! step whose start and end are both in the log).
+
+use crate::config::RuntimeConfig;
+use crate::controller::ControlState;
+use crate::log::CHANNELS;
+use crate::log_read::{check_schema_version, log_err, read_bytes, top_level};
+use crate::{Result, Setup};
+use model::Side;
+use serde_json::Value;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The robot at one instant, positions in metres relative to the stance foot (x forward,
+/// z up).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StickFigure {
+    /// Phase τ of the sample.
+    pub phase: f64,
+    /// Controller time, s.
+    pub t_s: f64,
+    /// Stance leg.
+    pub stance: Side,
+    /// Torso pitch used (the controller's estimate), rad.
+    pub pitch_rad: f64,
+    /// Hip (base origin) and the top of the torso (twice the torso's centre of mass height).
+    pub torso_m: [[f64; 2]; 2],
+    /// Stance leg: hip, knee, foot.
+    pub stance_leg_m: [[f64; 2]; 3],
+    /// Swing leg: hip, knee, foot.
+    pub swing_leg_m: [[f64; 2]; 3],
+}
+
+/// The tiles of one step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GaitTiles {
+    /// Robot name.
+    pub robot: String,
+    /// Thigh and shin lengths of the gait's design, m.
+    pub design_m: (f64, f64),
+    /// Step index (the controller's step counter) drawn.
+    pub step: u32,
+    /// Duration of that step, s.
+    pub step_duration_s: f64,
+    /// Step length at its end (swing foot ahead of the stance foot), m.
+    pub step_length_m: f64,
+    /// The figures, by increasing phase.
+    pub figures: Vec<StickFigure>,
+}
+
+#[derive(Clone, Debug, Default)]
+struct Row {
+    phase: Option<f64>,
+    stance: Option<Side>,
+    steps: Option<u32>,
+    walking: Option<bool>,
+    pitch: Option<f64>,
+    motor_q: Option<[f64; 4]>,
+}
+
+impl Row {
+    fn complete(&self) -> bool {
+        self.phase.is_some()
+            && self.stance.is_some()
+            && self.steps.is_some()
+            && self.walking == Some(true)
+            && self.pitch.is_some()
+            && self.motor_q.is_some()
+    }
+}
+
+/// Stick figures of `count` (≥ 2) evenly spaced phases of one complete step of the walk logged
+/// in `path`.
+pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
+    let path = path.as_ref();
+    if count < 2 {
+        return Err(log_err(
+            path,
+            format!("tiles: count is {count}, want at least 2"),
+        ));
+    }
+    let bytes = read_bytes(path)?;
+    let top = top_level(path, &bytes)?;
+    let origin = |name: &str| format!("{name} in {}", path.display());
+    let config = RuntimeConfig::from_toml(
+        top.attachment_text(path, "runtime.toml")?,
+        &origin("runtime.toml"),
+    )?;
+    let gait = model::gait::GaitFile::from_json(
+        top.attachment_text(path, "gait.json")?,
+        &origin("gait.json"),
+    )?;
+    let urdf = top.attachment_text(path, "robot.urdf")?.to_string();
+    let setup = Setup::from_parts(config, gait, urdf, &origin("robot.urdf"))?;
+    let names: Vec<&str> = setup
+        .config
+        .leg_motors
+        .iter()
+        .map(|m| m.joint.as_str())
+        .collect();
+    if names.len() != 4 {
+        return Err(log_err(
+            path,
+            format!("tiles: the config has {} leg motors, want 4", names.len()),
+        ));
+    }
+
+    // Rows by log time (every channel of a tick shares it).
+    let mut rows: BTreeMap<u64, Row> = BTreeMap::new();
+    let stream =
+        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
+            .map_err(|e| log_err(path, e))?;
+    let mut checked = Vec::new();
+    for message in stream {
+        // A cut-off log: use what was read.
+        let Ok(m) = message else { break };
+        let topic = m.channel.topic.as_str();
+        if ![CHANNELS[0], CHANNELS[1], CHANNELS[2], CHANNELS[3]].contains(&topic) {
+            continue;
+        }
+        if !checked.contains(&topic.to_string()) {
+            check_schema_version(path, &m.channel)?;
+            checked.push(topic.to_string());
+        }
+        let v: Value = serde_json::from_slice(&m.data)
+            .map_err(|e| log_err(path, format!("{topic} message is not JSON: {e}")))?;
+        let row = rows.entry(m.log_time).or_default();
+        match topic {
+            "/joints" => {
+                let mut q = [0.0; 4];
+                for (k, name) in names.iter().enumerate() {
+                    q[k] = v[*name]["q_rad"].as_f64().ok_or_else(|| {
+                        log_err(path, format!("/joints message without {name}.q_rad"))
+                    })?;
+                }
+                row.motor_q = Some(q);
+            }
+            "/hzd" => {
+                row.phase = v["phase"].as_f64();
+                row.steps = v["steps"].as_u64().and_then(|s| u32::try_from(s).ok());
+                row.stance = match v["stance"].as_str() {
+                    Some("left") => Some(Side::Left),
+                    Some("right") => Some(Side::Right),
+                    _ => None,
+                };
+            }
+            "/estimator" => row.pitch = v["pitch_rad"].as_f64(),
+            _ => {
+                let state = v["state"].as_str();
+                row.walking = Some(
+                    state == Some(ControlState::Walk.name())
+                        || state == Some(ControlState::Stop.name()),
+                );
+            }
+        }
+    }
+    let rows: Vec<(f64, Row)> = rows
+        .into_iter()
+        .filter(|(_, r)| r.complete())
+        .map(|(t, r)| (t as f64 * 1e-9, r))
+        .collect();
+    // Runs of equal step counters; a complete step has a different one before and after it.
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for i in 0..rows.len() {
+        if i == 0 || rows[i].1.steps != rows[i - 1].1.steps {
+            runs.push((i, i + 1));
+        } else if let Some(last) = runs.last_mut() {
+            last.1 = i + 1;
+        }
+    }
+    if runs.len() < 3 {
+        return Err(log_err(
+            path,
+            format!(
+                "tiles: no complete step while walking ({} step counter value(s) in the log; \
+                 log a walk of at least two steps)",
+                runs.len()
+            ),
+        ));
+    }
+    let (a, b) = runs[runs.len() / 2];
+    let step_rows = &rows[a..b];
+    let step = step_rows[0].1.steps.unwrap_or(0);
+
+    let model = &setup.model;
+    let legs = model.legs()?;
+    let nominal = model.nominal_pose()?;
+    let mut q = model.with_design(
+        &nominal,
+        setup.gait.design.thigh_length_m,
+        setup.gait.design.shin_length_m,
+    )?;
+    q[0] = 0.0;
+    q[1] = 0.0;
+    let mut coords = [0usize; 4];
+    for (k, name) in names.iter().enumerate() {
+        coords[k] = model.joints[model.require_joint(name)?].coordinate;
+    }
+    let mut figure_at = |t_s: f64, r: &Row| -> Result<StickFigure> {
+        let (Some(phase), Some(stance), Some(pitch), Some(motor_q)) =
+            (r.phase, r.stance, r.pitch, r.motor_q)
+        else {
+            return Err(log_err(path, "tiles: incomplete sample"));
+        };
+        q[2] = pitch;
+        for (k, m) in setup.config.leg_motors.iter().enumerate() {
+            q[coords[k]] = m.direction * motor_q[k] + m.offset_rad;
+        }
+        let st = model.body_poses(&q)?;
+        let hip = st.pose[0].xz_m;
+        let com = model.body_com_in(&st, 0);
+        let foot_stance = model.frame_position_in(&st, legs.side(stance).foot);
+        let shift = |p: [f64; 2]| [p[0] - foot_stance[0], p[1] - foot_stance[1]];
+        let leg = |side: Side| -> Result<[[f64; 2]; 3]> {
+            let l = legs.side(side);
+            Ok([
+                shift(model.joint_position(&q, l.hip)?),
+                shift(model.joint_position(&q, l.knee)?),
+                shift(model.frame_position_in(&st, l.foot)),
+            ])
+        };
+        Ok(StickFigure {
+            phase,
+            t_s,
+            stance,
+            pitch_rad: pitch,
+            torso_m: [
+                shift(hip),
+                shift([2.0 * com[0] - hip[0], 2.0 * com[1] - hip[1]]),
+            ],
+            stance_leg_m: leg(stance)?,
+            swing_leg_m: leg(stance.other())?,
+        })
+    };
+    let mut figures = Vec::with_capacity(count);
+    for k in 0..count {
+        let target = k as f64 / (count - 1) as f64;
+        let nearest = step_rows
+            .iter()
+            .min_by(|x, y| {
+                let dx = (x.1.phase.unwrap_or(f64::NAN) - target).abs();
+                let dy = (y.1.phase.unwrap_or(f64::NAN) - target).abs();
+                dx.total_cmp(&dy)
+            })
+            .ok_or_else(|| log_err(path, "tiles: empty step"))?;
+        figures.push(figure_at(nearest.0, &nearest.1)?);
+    }
+    let last = figure_at(
+        step_rows[step_rows.len() - 1].0,
+        &step_rows[step_rows.len() - 1].1,
+    )?;
+    Ok(GaitTiles {
+        robot: model.name.clone(),
+        design_m: (
+            setup.gait.design.thigh_length_m,
+            setup.gait.design.shin_length_m,
+        ),
+        step,
+        step_duration_s: step_rows[step_rows.len() - 1].0 - step_rows[0].0,
+        step_length_m: last.swing_leg_m[2][0],
+        figures,
+    })
+}
