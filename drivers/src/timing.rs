@@ -87,20 +87,32 @@ pub fn frame_bits_exact(id: u32, data: &[u8]) -> Option<u32> {
         return None;
     }
     let dlc = data.len() as u32;
-    // SOF, id (MSB first), RTR, IDE, r0, DLC (MSB first), data (MSB first).
-    let header = core::iter::once(false)
-        .chain((0..11).rev().map(move |i| (id >> i) & 1 == 1))
-        .chain([false, false, false])
-        .chain((0..4).rev().map(move |i| (dlc >> i) & 1 == 1));
-    let payload = data
-        .iter()
-        .flat_map(|byte| (0..8).rev().map(move |i| (byte >> i) & 1 == 1));
-    let crc = crc15(header.clone().chain(payload.clone()));
-    let crc_bits = (0..15).rev().map(move |i| (crc >> i) & 1 == 1);
+    // SOF, id (MSB first), RTR, IDE, r0, DLC (MSB first), data (MSB first), then the CRC: at
+    // most 19 + 64 + 15 bits, in a fixed buffer (the simulated bus counts every frame).
+    let mut bits = [false; 19 + 64 + 15];
+    let mut n = 0;
+    let mut push = |bits: &mut [bool], value: u32, width: u32| {
+        for i in (0..width).rev() {
+            bits[n] = (value >> i) & 1 == 1;
+            n += 1;
+        }
+    };
+    // SOF 0, id, RTR 0, IDE 0, r0 0, DLC.
+    push(&mut bits, 0, 1);
+    push(&mut bits, id, 11);
+    push(&mut bits, 0, 3);
+    push(&mut bits, dlc, 4);
+    for &byte in data {
+        push(&mut bits, u32::from(byte), 8);
+    }
+    let header_and_data = 19 + 8 * data.len();
+    let crc = crc15(bits[..header_and_data].iter().copied());
+    push(&mut bits, u32::from(crc), 15);
+    let n = header_and_data + 15;
     let mut stuff_bits = 0;
     let mut run_bit = None;
     let mut run_len = 0;
-    for bit in header.chain(payload).chain(crc_bits) {
+    for &bit in &bits[..n] {
         if Some(bit) == run_bit {
             run_len += 1;
         } else {

@@ -11,8 +11,9 @@
 //! in the world; the impact with the ground is rigid and plastic (the paper's reset map Δ, with the
 //! left/right relabeling in [`PlanarModel::reset_map`]).
 
+use crate::kinematics::BodyStates;
 use crate::linalg::solve_in_place;
-use crate::robot::{BodyInertia, PlanarModel, Side};
+use crate::robot::{BodyInertia, PlanarModel, Side, MAX_DOF};
 use crate::{ModelError, Real, Result};
 use nalgebra::{DMatrix, DVector};
 
@@ -136,6 +137,81 @@ impl PlanarModel {
             mass_matrix: dmat,
             drift: h,
         })
+    }
+
+    /// D(q) and H(q, q̇) with the model's own mass properties from body states already computed
+    /// at (q, q̇) ([`PlanarModel::body_states`]), written into `mass_matrix` (dof × dof) and
+    /// `drift` (dof). Never allocates: the simulator calls it at 10 kHz. Same sums as
+    /// [`PlanarModel::dynamics`], in the same order.
+    pub fn dynamics_into(
+        &self,
+        st: &BodyStates<f64>,
+        mass_matrix: &mut DMatrix<f64>,
+        drift: &mut DVector<f64>,
+    ) -> Result<()> {
+        let n = self.dof();
+        if mass_matrix.shape() != (n, n) || drift.len() != n {
+            return Err(ModelError::Dimension {
+                what: "dynamics_into buffers",
+                expected: n,
+                found: drift.len(),
+            });
+        }
+        mass_matrix.fill(0.0);
+        drift.fill(0.0);
+        let g = self.gravity_mps2;
+        // Columns of a body's Jacobian: the base, then the joints on its path (≤ MAX_DOF).
+        let mut cols = [0usize; MAX_DOF];
+        let mut jac = [[0.0f64; MAX_DOF]; 2];
+        for (b, body) in self.bodies.iter().enumerate() {
+            let inertia = &body.inertia;
+            if inertia.mass_kg == 0.0 && inertia.inertia_yy_kgm2 == 0.0 {
+                continue;
+            }
+            let m = inertia.mass_kg;
+            let com = self.point_position(st, b, inertia.com_xz_m);
+            let mut nc = 0;
+            for c in 0..crate::robot::BASE_DOF {
+                cols[nc] = c;
+                nc += 1;
+            }
+            for &j in &body.joint_path {
+                cols[nc] = self.joints[j].coordinate;
+                nc += 1;
+            }
+            for &c in &cols[..nc] {
+                jac[0][c] = 0.0;
+                jac[1][c] = 0.0;
+            }
+            self.point_jacobian_into(st, b, com, |r, c, v| jac[r][c] = v);
+            let bias = self.point_bias_acceleration(st, b, inertia.com_xz_m);
+            let f = [m * bias[0], m * (bias[1] + g)];
+            for &i in &cols[..nc] {
+                drift[i] += jac[0][i] * f[0] + jac[1][i] * f[1];
+                for &k in &cols[..nc] {
+                    mass_matrix[(i, k)] += m * (jac[0][i] * jac[0][k] + jac[1][i] * jac[1][k]);
+                }
+            }
+            // Angular Jacobian: 1 on the base pitch, the axis sign on each revolute joint.
+            let mut ang = [(0usize, 0.0f64); MAX_DOF];
+            let mut na = 0;
+            ang[na] = (2, 1.0);
+            na += 1;
+            for &j in &body.joint_path {
+                if let crate::robot::JointKind::Revolute { axis_sign } = self.joints[j].kind {
+                    ang[na] = (self.joints[j].coordinate, axis_sign);
+                    na += 1;
+                }
+            }
+            // Coordinate order, as `dynamics` visits them.
+            ang[..na].sort_unstable_by_key(|&(c, _)| c);
+            for &(i, ai) in &ang[..na] {
+                for &(k, ak) in &ang[..na] {
+                    mass_matrix[(i, k)] += inertia.inertia_yy_kgm2 * (ai * ak);
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Inverse dynamics `D(q) q̈ + H(q, q̇)` by one forward recursion of body accelerations and a

@@ -392,3 +392,39 @@ fn stance_leg_angle_acceleration_matches_second_order_dual_numbers() {
         );
     }
 }
+
+#[test]
+fn allocation_free_dynamics_equals_dynamics_bit_for_bit() {
+    // `dynamics_into` is the simulator's 10 kHz path; it must be the same computation.
+    for model in [
+        adam(),
+        PlanarModel::from_urdf_file(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../configs/robots/adam_codesign.urdf"
+        ))
+        .expect("co-designed ADAM"),
+    ] {
+        let n = model.dof();
+        let mut r = rng(11);
+        let mut d = DMatrix::from_element(n, n, f64::NAN);
+        let mut h = DVector::from_element(n, f64::NAN);
+        for _ in 0..50 {
+            let q = random_q(&model, &mut r);
+            let dq = random_dq(&model, &mut r, 2.0);
+            let reference = model.dynamics(&q, &dq).expect("dynamics");
+            let st = model.body_states(&q, &dq).expect("states");
+            model.dynamics_into(&st, &mut d, &mut h).expect("into");
+            for (a, b) in d.iter().zip(reference.mass_matrix.iter()) {
+                assert_eq!(a.to_bits(), b.to_bits(), "D");
+            }
+            for (a, b) in h.iter().zip(reference.drift.iter()) {
+                assert_eq!(a.to_bits(), b.to_bits(), "H");
+            }
+        }
+        let mut wrong = DVector::zeros(n + 1);
+        let st = model
+            .body_states(&vec![0.0; n], &vec![0.0; n])
+            .expect("states");
+        assert!(model.dynamics_into(&st, &mut d, &mut wrong).is_err());
+    }
+}

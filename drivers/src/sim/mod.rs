@@ -297,6 +297,11 @@ pub struct RobotSim {
     q_prev: Vec<f64>,
     dq_prev: Vec<f64>,
     generalized_force: Vec<f64>,
+    /// D(q) and H(q, q̇) of the present step (buffers reused every step).
+    mass_matrix: nalgebra::DMatrix<f64>,
+    drift: nalgebra::DVector<f64>,
+    /// Body poses at the present q, when known (saves a kinematics pass in the fall check).
+    poses: Option<BodyStates<f64>>,
     reduced_a: Vec<f64>,
     reduced_b: Vec<f64>,
     torque_nm: Vec<f64>,
@@ -355,6 +360,9 @@ impl RobotSim {
             q_prev: vec![0.0; n],
             dq_prev: vec![0.0; n],
             generalized_force: vec![0.0; n],
+            mass_matrix: nalgebra::DMatrix::zeros(n, n),
+            drift: nalgebra::DVector::zeros(n),
+            poses: None,
             reduced_a: vec![0.0; nr],
             reduced_b: vec![0.0; nr],
             contact: [Contact::Air; 2],
@@ -394,6 +402,7 @@ impl RobotSim {
 
     fn set_state_with_stance(&mut self, q: &[f64], dq: &[f64], only: Option<usize>) -> Result<()> {
         self.imu_last = None;
+        self.poses = None;
         let n = self.model.dof();
         for (what, v) in [("q", q), ("dq", dq)] {
             if v.len() != n {
@@ -429,7 +438,7 @@ impl RobotSim {
         }
         let dy = self.model.dynamics(&self.q, &self.dq)?;
         self.factor(&dy.mass_matrix)?;
-        self.project()?;
+        self.project(None)?;
         self.fallen = None;
         self.max_penetration_m = 0.0;
         self.fault_t_s = None;
@@ -517,10 +526,14 @@ impl RobotSim {
     /// Integrate up to `h`; returns the time integrated (less than `h` if a touchdown
     /// interrupted the step at that instant).
     fn sub_step(&mut self, h: f64, detect_touchdown: bool) -> Result<f64> {
+        self.poses = None;
         let st = self.model.body_states(&self.q, &self.dq)?;
-        let dy = self.model.dynamics(&self.q, &self.dq)?;
-        self.factor(&dy.mass_matrix)?;
-        for (f, hv) in self.generalized_force.iter_mut().zip(dy.drift.iter()) {
+        self.model
+            .dynamics_into(&st, &mut self.mass_matrix, &mut self.drift)?;
+        self.solver
+            .factor_mass(&self.mass_matrix)
+            .map_err(|_| RobotSimError::NotPositiveDefinite { t_s: self.t_s })?;
+        for (f, hv) in self.generalized_force.iter_mut().zip(self.drift.iter()) {
             *f = -hv;
         }
         for (&c, &u) in self.actuated_coordinates.iter().zip(&self.torque_nm) {
@@ -588,9 +601,14 @@ impl RobotSim {
             self.record_penetration()?;
             return Ok(s * h);
         }
-        self.project()?;
+        let st2 = if self.project(Some(&st1))? {
+            self.model.body_poses(&self.q)?
+        } else {
+            st1
+        };
         self.t_s += h;
-        self.record_penetration()?;
+        self.record_penetration_in(&st2);
+        self.poses = Some(st2);
         Ok(h)
     }
 
@@ -744,7 +762,7 @@ impl RobotSim {
         for (&c, &v) in self.solver.free().iter().zip(&self.reduced_b) {
             self.dq[c] = v;
         }
-        self.project()?;
+        self.project(None)?;
         let kinetic_energy_after_j = self.model.kinetic_energy(&self.q, &self.dq)?;
         let st = self.model.body_poses(&self.q)?;
         let other = self.model.frame_position_in(&st, self.feet[1 - i]);
@@ -762,13 +780,17 @@ impl RobotSim {
     }
 
     /// Pull the stance feet back onto their anchors and their velocities to zero, in the
-    /// kinetic-energy metric of the last factored `D` (corrections are O(h²) small).
-    fn project(&mut self) -> Result<()> {
+    /// kinetic-energy metric of the last factored `D` (corrections are O(h²) small). `poses`:
+    /// the body poses at the present q, if already computed. Whether q changed.
+    fn project(&mut self, poses: Option<&BodyStates<f64>>) -> Result<bool> {
         let (frames, sides, k) = self.stance_frames();
         if k == 0 {
-            return Ok(());
+            return Ok(false);
         }
-        let st = self.model.body_poses(&self.q)?;
+        let st = match poses {
+            Some(st) => *st,
+            None => self.model.body_poses(&self.q)?,
+        };
         self.solver.set_contacts(&self.model, &st, &frames[..k]);
         let mut c = [0.0; 2 * MAX_CONTACTS];
         for r in 0..k {
@@ -788,23 +810,30 @@ impl RobotSim {
         for (&c, &v) in self.solver.free().iter().zip(&self.reduced_b) {
             self.dq[c] = v;
         }
-        Ok(())
+        Ok(true)
     }
 
     fn record_penetration(&mut self) -> Result<()> {
         let st = self.model.body_poses(&self.q)?;
+        self.record_penetration_in(&st);
+        Ok(())
+    }
+
+    fn record_penetration_in(&mut self, st: &BodyStates<f64>) {
         for &f in &self.feet {
-            let z = self.model.frame_position_in(&st, f)[1];
+            let z = self.model.frame_position_in(st, f)[1];
             self.max_penetration_m = self.max_penetration_m.max(-z);
         }
-        Ok(())
     }
 
     fn check_fall(&mut self) -> Result<()> {
         if self.fallen.is_some() {
             return Ok(());
         }
-        let st = self.model.body_poses(&self.q)?;
+        let st = match self.poses {
+            Some(st) => st,
+            None => self.model.body_poses(&self.q)?,
+        };
         let torso_com = self.model.bodies[0].inertia.com_xz_m;
         let top = self
             .model
