@@ -17,7 +17,8 @@
 //! | [`telemetry`] | `#[repr(C)]` [`telemetry::StateSample`], published over iceoryx2 (feature `iceoryx2`, default) |
 //! | [`log`] | MCAP writer thread fed by a wait-free queue; drops counted |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
-//! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth |
+//! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth; fault injection and the soak |
+//! | [`faults`] | fault profiles (TOML or built-in): wire faults, scheduled and random faults, seeded schedule |
 //!
 //! ## Data flow of one tick
 //! ```text
@@ -61,8 +62,10 @@ pub mod config;
 pub mod controller;
 mod error;
 pub mod estimator;
+pub mod faults;
 pub mod io;
 pub mod log;
+mod log_guard;
 pub mod log_read;
 pub mod operator;
 pub mod robot;
