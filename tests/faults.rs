@@ -67,8 +67,13 @@ fn check_log(name: &str, report: &SimWalkReport) {
         Some(trip) => {
             assert_eq!(info.safety_events.len(), 1, "{name}");
             let v = &info.safety_events[0];
-            let reason = format!("\"reason\":\"{}\"", trip.name());
-            assert!(v.contains(&reason) && v.contains("\"t_s\":"), "{name}: {v}");
+            assert!(v.contains("\"t_s\":"), "{name}: {v}");
+            // Every field of the trip (reason, code and its values) as the run latched it.
+            let expected = runtime::log::trip_json(&trip);
+            for (key, value) in expected.as_object().expect("a JSON object") {
+                let pair = format!("\"{key}\":{value}");
+                assert!(v.contains(&pair), "{name}: no {pair} in {v}");
+            }
         }
     }
 }

@@ -79,7 +79,8 @@ pub enum Fault {
         /// Leg motor slot.
         slot: usize,
     },
-    /// The motor's winding is set to this temperature (the thermal model carries on).
+    /// The motor's winding is set to this temperature at the start; the thermal model carries
+    /// on from there (the fault's duration does not cool it).
     HotMotor {
         /// Leg motor slot.
         slot: usize,
@@ -112,7 +113,7 @@ pub enum Fault {
         /// Belt speed, m/s.
         speed_mps: f64,
     },
-    /// A force on the torso at the hip axis (world frame).
+    /// A force on the torso at the hip axis (world frame), for the fault's duration.
     Push {
         /// Forward force, N.
         force_x_n: f64,

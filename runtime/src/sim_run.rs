@@ -1,4 +1,4 @@
-//! The runtime on the simulated ADAM: [`drivers::sim::RobotSim`] as the [`JointPlant`] behind a
+//! The runtime on the simulated ADAM: [`drivers::sim::RobotSim`] as the [`JointPlant`](drivers::sim_bus::JointPlant) behind a
 //! [`SimBus`] (every command and reply goes through the A1 CAN codec and the simulated firmware),
 //! its torso IMU as the runtime's [`crate::Imu`], on a treadmill, under a simulated clock.
 //!
