@@ -61,6 +61,29 @@ enum Command {
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
     },
+    /// Walk the simulated robot for a long time under random faults; after each trip reset and
+    /// walk on. Prints ticks, overruns, trips by reason, log drops, worst tick, distance.
+    Soak {
+        /// Simulated minutes to walk (fractions allowed).
+        #[arg(long)]
+        minutes: f64,
+        /// Fault profile: none, loss-0.1, loss-1, loss-10, corrupt-1, delay-1, soak, rough,
+        /// or a TOML file.
+        #[arg(long, default_value = "soak")]
+        faults: String,
+        /// Seed of the faults and the sensor noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Keep each episode's MCAP log in this folder (default: a temporary log, removed).
+        #[arg(long)]
+        log_dir: Option<PathBuf>,
+        /// Gait file (JSON); default: the co-designed ADAM's.
+        #[arg(long, default_value = runtime::DEFAULT_GAIT)]
+        gait: PathBuf,
+        /// Runtime config (TOML).
+        #[arg(long, default_value = "configs/runtime/adam.toml")]
+        config: PathBuf,
+    },
     /// Figures from run logs: `adam plot portrait <run.mcap> [--compare <other.mcap>]`,
     /// `adam plot tiles <run.mcap>`.
     Plot {
@@ -880,6 +903,41 @@ fn demo() -> Result<()> {
     sim_walk(&setup, &options)
 }
 
+fn soak(
+    minutes: f64,
+    faults: &str,
+    seed: u64,
+    log_dir: Option<PathBuf>,
+    config: &std::path::Path,
+    gait: &std::path::Path,
+) -> Result<()> {
+    let profile = runtime::faults::FaultProfile::resolve(faults)?;
+    let setup = runtime::Setup::load(config, gait)?;
+    let options = runtime::sim_run::SoakOptions {
+        duration_s: minutes * 60.0,
+        profile,
+        seed,
+        log_dir,
+    };
+    println!("adam soak: {minutes} min of simulated walking, faults `{faults}`, seed {seed}");
+    let wall = std::time::Instant::now();
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let report = runtime::sim_run::soak(&setup, &options, |r| {
+        if tty {
+            eprint!("\r{:.1} s simulated, {} episodes", r.sim_time_s, r.episodes);
+        }
+    })?;
+    if tty {
+        eprintln!();
+    }
+    print!("{report}");
+    println!(
+        "wall time                    {:.1} s",
+        wall.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 fn main() -> std::process::ExitCode {
     match run(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -928,6 +986,14 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
         }
+        Command::Soak {
+            minutes,
+            faults,
+            seed,
+            log_dir,
+            gait,
+            config,
+        } => soak(minutes, &faults, seed, log_dir, &config, &gait),
         Command::Plan { robot, config, out } => plan(&robot, &config, &out),
         Command::Gait {
             command: GaitCommand::Check { gait, epsilon },

@@ -303,3 +303,61 @@ fn a_run_killed_with_sigkill_leaves_a_log_that_reads_recovers_and_replays() {
     assert!(ok && out.contains("bit-identical"), "{out}\n{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn soak_walks_under_faults_and_prints_its_table() {
+    // 0.05 min = 3 s of simulated walking under the `rough` profile (a fault every ~1.5 s).
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("soak-cli");
+    let _ = std::fs::remove_dir_all(&dir);
+    let (ok, out, err) = adam(&[
+        "soak",
+        "--minutes",
+        "0.05",
+        "--faults",
+        "rough",
+        "--seed",
+        "3",
+        "--log-dir",
+        dir.to_str().expect("utf-8 path"),
+    ]);
+    assert!(ok, "{err}");
+    for row in [
+        "ticks",
+        "overruns",
+        "trips",
+        "log drops",
+        "worst tick compute time",
+        "distance walked",
+    ] {
+        assert!(out.contains(row), "no `{row}` in:\n{out}");
+    }
+    // 3 s at 1 kHz: every tick of every episode is counted once.
+    let ticks = out
+        .lines()
+        .find(|l| l.starts_with("ticks "))
+        .and_then(|l| l.split_whitespace().last())
+        .and_then(|v| v.parse::<u64>().ok());
+    assert_eq!(ticks, Some(3000), "{out}");
+    // Each episode left a complete log.
+    let logs: Vec<_> = std::fs::read_dir(&dir).expect("log dir").collect();
+    assert!(!logs.is_empty());
+    for entry in logs {
+        let path = entry.expect("entry").path();
+        let info = runtime::log_read::read_info(&path).expect("log reads");
+        assert_eq!(info.truncated, None, "{}", path.display());
+    }
+}
+
+#[test]
+fn soak_refuses_an_unknown_fault_profile_by_name() {
+    let (ok, _, err) = adam(&["soak", "--minutes", "0.01", "--faults", "lossy"]);
+    assert!(
+        !ok && err.contains("`lossy`") && err.contains("loss-1"),
+        "{err}"
+    );
+    let (ok, _, err) = adam(&["soak", "--minutes=-1"]);
+    assert!(
+        !ok && err.contains("minutes") && err.contains("-1"),
+        "{err}"
+    );
+}

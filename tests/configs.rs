@@ -45,8 +45,12 @@ fn every_config_file_loads_and_validates() {
                         planner::config::PlannerConfig::load(path)
                             .unwrap_or_else(|e| panic!("{e}"));
                     }
+                    Some("faults") => {
+                        runtime::faults::FaultProfile::load(path)
+                            .unwrap_or_else(|e| panic!("{e}"));
+                    }
                     _ => panic!(
-                        "{}: TOML outside configs/runtime/ or configs/planner/; add a loader",
+                        "{}: TOML outside configs/runtime/, configs/planner/ or configs/faults/; add a loader",
                         path.display()
                     ),
                 }

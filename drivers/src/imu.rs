@@ -9,6 +9,10 @@
 //! 1 kHz loop rate, not a datasheet): each read adds independent Gaussian white noise to each
 //! channel, and a gyro bias that starts at `gyro_bias_rad_s` and random-walks with
 //! `gyro_bias_walk_rad_s_per_sqrt_s · √Δt` between reads. The accelerometer has no bias.
+//!
+//! Faults ([`ImuFault`], applied by the simulator on top of the noisy sample): a dropout (no
+//! sample: [`ImuError::Timeout`]), a spike (the gyro reads a huge rate) and a frozen output (the
+//! last good sample, repeated with fresh time stamps).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -42,6 +46,48 @@ pub enum ImuError {
 pub trait Imu {
     /// Write the latest sample into `out`; allocates nothing.
     fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError>;
+}
+
+/// A fault of the IMU's output.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum ImuFault {
+    /// Healthy.
+    #[default]
+    None,
+    /// No sample arrives.
+    Dropout,
+    /// The gyro reads this much more than the truth \[rad/s\].
+    Spike {
+        /// Added pitch rate \[rad/s\].
+        gyro_rad_s: f64,
+    },
+    /// The output repeats the last sample before the fault (time stamps still advance).
+    Frozen,
+}
+
+impl ImuFault {
+    /// The sample the host reads: `fresh` (this period's healthy sample) under this fault,
+    /// `held` the last sample delivered before the fault began. Pure; nothing allocates.
+    pub fn apply(
+        &self,
+        fresh: &ImuSample,
+        held: &ImuSample,
+        out: &mut ImuSample,
+    ) -> Result<(), ImuError> {
+        match *self {
+            ImuFault::None => *out = *fresh,
+            ImuFault::Dropout => return Err(ImuError::Timeout),
+            ImuFault::Spike { gyro_rad_s } => {
+                *out = *fresh;
+                out.gyro_pitch_rad_s += gyro_rad_s;
+            }
+            ImuFault::Frozen => {
+                *out = *held;
+                out.t_s = fresh.t_s;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// IMU noise parameters.
@@ -130,6 +176,7 @@ fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 
@@ -165,6 +212,36 @@ mod tests {
         // Relative standard error of an sd estimate ≈ 1/√(2n) = 0.5 %: allow 3 %.
         assert!((sd / 0.01 - 1.0).abs() < 0.03, "{sd}");
         assert!(((sa2 / n as f64).sqrt() / 0.2 - 1.0).abs() < 0.03);
+    }
+
+    #[test]
+    fn faults_drop_spike_or_freeze_the_sample() {
+        let fresh = ImuSample {
+            t_s: 2.0,
+            gyro_pitch_rad_s: 0.1,
+            accel_x_mps2: 0.3,
+            accel_z_mps2: 9.8,
+        };
+        let held = ImuSample {
+            t_s: 1.0,
+            gyro_pitch_rad_s: -0.2,
+            accel_x_mps2: 1.0,
+            accel_z_mps2: 9.0,
+        };
+        let mut out = ImuSample::default();
+        ImuFault::None.apply(&fresh, &held, &mut out).unwrap();
+        assert_eq!(out, fresh);
+        assert_eq!(
+            ImuFault::Dropout.apply(&fresh, &held, &mut out),
+            Err(ImuError::Timeout)
+        );
+        ImuFault::Spike { gyro_rad_s: 50.0 }
+            .apply(&fresh, &held, &mut out)
+            .unwrap();
+        assert_eq!(out.gyro_pitch_rad_s, 50.1);
+        assert_eq!(out.accel_z_mps2, 9.8);
+        ImuFault::Frozen.apply(&fresh, &held, &mut out).unwrap();
+        assert_eq!(out, ImuSample { t_s: 2.0, ..held });
     }
 
     #[test]

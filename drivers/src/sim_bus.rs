@@ -46,6 +46,19 @@
 //!
 //! The joint the motor drives is a [`JointPlant`]: [`InertiaDampingPlant`] here, the robot
 //! simulator later.
+//!
+//! # Fault injection (off by default; seeded, so the same seed gives the same faults)
+//! * Wire ([`WireFaults`], [`SimBus::set_wire_faults`]): each frame, in each direction, is lost
+//!   with `loss_probability` or corrupted with `corrupt_probability`; each reply is delayed by
+//!   `delay_s` with `delay_probability`. A corrupted frame carries damage the A1 codec can see
+//!   (a cut data length, a reserved mode, an id outside its kind's range: bit flips inside the
+//!   payload are caught by the CAN CRC in the controller and become a loss); the firmware and
+//!   the host decoder reject it, so its reply is missing. A delayed reply that arrives after the
+//!   exchange budget is missing too (the real bus drains it at the next exchange). The fault
+//!   generator has its own seeded stream: enabling faults leaves the sensor noise unchanged.
+//! * Motors: [`SimBus::set_silent`] (a cut cable), [`SimBus::set_error_flags`] (firmware fault
+//!   bits in every reply), [`SimBus::set_temperature_c`] (a hot winding; the thermal model
+//!   carries on from there). [`SimBus::wire_stats`] counts what the wire did.
 
 use crate::a1::{
     self, decode_host_frame, encode_reply, Command, ErrorFlags, Frame, HostFrame, Mode, MotorId,
@@ -357,6 +370,100 @@ pub struct TapEntry {
     pub frame: Frame,
 }
 
+/// Faults of the simulated CAN wire (probabilities per frame, in `[0, 1]`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct WireFaults {
+    /// A frame (command or reply) vanishes.
+    pub loss_probability: f64,
+    /// A frame (command or reply) arrives damaged and is rejected by its decoder.
+    pub corrupt_probability: f64,
+    /// A reply is delayed by `delay_s`.
+    pub delay_probability: f64,
+    /// Delay of a delayed reply \[s\].
+    pub delay_s: f64,
+}
+
+impl WireFaults {
+    /// A clean wire.
+    pub const NONE: Self = Self {
+        loss_probability: 0.0,
+        corrupt_probability: 0.0,
+        delay_probability: 0.0,
+        delay_s: 0.0,
+    };
+
+    /// The first field out of range, as (name, value).
+    pub fn invalid_field(&self) -> Option<(&'static str, f64)> {
+        let probabilities = [
+            ("loss_probability", self.loss_probability),
+            ("corrupt_probability", self.corrupt_probability),
+            ("delay_probability", self.delay_probability),
+        ];
+        probabilities
+            .into_iter()
+            .find(|(_, p)| !(0.0..=1.0).contains(p))
+            .or_else(|| {
+                (!(self.delay_s.is_finite() && self.delay_s >= 0.0))
+                    .then_some(("delay_s", self.delay_s))
+            })
+    }
+
+    fn is_clean(&self) -> bool {
+        self.loss_probability == 0.0
+            && self.corrupt_probability == 0.0
+            && self.delay_probability == 0.0
+    }
+}
+
+/// Damage a corrupted frame carries, each one a distinct codec rejection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Corruption {
+    /// The data length code is cut to this many bytes (`DecodeError::WrongLength`).
+    Length(usize),
+    /// The mode field holds the reserved value (`DecodeError::UnknownMode`); on a special frame
+    /// the opcode byte is garbled instead (`DecodeError::UnknownOpcode`).
+    ReservedMode,
+    /// The id is moved out of its kind's range (`DecodeError::WrongId`).
+    Id,
+}
+
+/// Apply `damage` to `frame`: the id and the bytes as received (pure; the decoders reject them).
+pub fn corrupt(frame: &Frame, damage: Corruption) -> (u32, [u8; a1::codec::FRAME_LEN], usize) {
+    let mut data = frame.data;
+    let mut id = frame.id;
+    let mut len = data.len();
+    match damage {
+        Corruption::Length(n) => len = n.min(data.len() - 1),
+        Corruption::ReservedMode => match a1::codec::classify(frame.id) {
+            Some((a1::codec::FrameKind::Special, _)) => data[0] = 0xEE,
+            Some((a1::codec::FrameKind::Command, _)) => {
+                let payload = u64::from_le_bytes(data) | (0b11 << a1::codec::CMD_MODE_START_BIT);
+                data = payload.to_le_bytes();
+            }
+            _ => {
+                let payload = u64::from_le_bytes(data) | (0b11 << a1::codec::REPLY_MODE_START_BIT);
+                data = payload.to_le_bytes();
+            }
+        },
+        // Bit 10 set: above every A1 id range (standard ids are 11 bits).
+        Corruption::Id => id |= 0x700,
+    }
+    (id, data, len)
+}
+
+/// What the simulated wire did (counts of frames).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct WireStats {
+    /// Frames lost (either direction).
+    pub lost: u64,
+    /// Frames corrupted and rejected by a decoder (either direction).
+    pub corrupted: u64,
+    /// Replies delayed.
+    pub delayed: u64,
+    /// Delayed replies that arrived after the exchange budget (missing).
+    pub delayed_late: u64,
+}
+
 /// A shared recorder of the simulated wire (diagnostics and conformance tests only: it
 /// locks and grows a `Vec`, so leave it off in real-time use).
 pub type WireTap = Arc<Mutex<Vec<TapEntry>>>;
@@ -375,6 +482,7 @@ struct Firmware {
     tau_nm: f64,
     temperature_c: f64,
     overheated: bool,
+    injected_errors: ErrorFlags,
 }
 
 impl Firmware {
@@ -393,6 +501,7 @@ impl Firmware {
             tau_nm: 0.0,
             temperature_c: model.ambient_c,
             overheated: false,
+            injected_errors: ErrorFlags::NONE,
         }
     }
 
@@ -404,10 +513,15 @@ impl Firmware {
 
     /// Handle one frame from the host; the reply frame, if any.
     fn receive(&mut self, frame: &Frame, model: &A1Model) -> Option<Frame> {
+        self.receive_bytes(frame.id, &frame.data, model)
+    }
+
+    /// Handle the id and bytes of a host frame as received (possibly damaged on the wire).
+    fn receive_bytes(&mut self, id: u32, data: &[u8], model: &A1Model) -> Option<Frame> {
         if self.silent {
             return None;
         }
-        match decode_host_frame(frame.id, &frame.data).ok()? {
+        match decode_host_frame(id, data).ok()? {
             HostFrame::Command(command) if command.motor == self.motor.spec.id => {
                 if self.enabled {
                     self.inbox = Some(command);
@@ -435,9 +549,9 @@ impl Firmware {
 
     fn reply(&self) -> Reply {
         let errors = if self.overheated {
-            ErrorFlags::OVER_TEMPERATURE
+            ErrorFlags(ErrorFlags::OVER_TEMPERATURE.0 | self.injected_errors.0)
         } else {
-            ErrorFlags::NONE
+            self.injected_errors
         };
         Reply {
             motor: self.motor.spec.id,
@@ -509,6 +623,13 @@ impl Firmware {
     }
 }
 
+/// What the wire did to one frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum WireFault {
+    Lost,
+    Corrupted(Corruption),
+}
+
 /// Standard normal sample (Box–Muller), from the seeded generator only.
 fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
     let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
@@ -528,7 +649,13 @@ pub struct SimBus<P: JointPlant> {
     ticks: u64,
     torques_nm: Vec<f64>,
     tap: Option<WireTap>,
+    wire_faults: WireFaults,
+    fault_rng: ChaCha8Rng,
+    wire_stats: WireStats,
 }
+
+/// Mixed into the seed of the fault stream, so it differs from the noise stream.
+const FAULT_STREAM: u64 = 0xFA17_5EED_0000_0001;
 
 impl<P: JointPlant> SimBus<P> {
     /// A simulation of `config.motors` driving `plant`.
@@ -582,8 +709,55 @@ impl<P: JointPlant> SimBus<P> {
             table: MotorTable::default(),
             state: Lifecycle::Unconfigured,
             tap: None,
+            wire_faults: WireFaults::NONE,
+            fault_rng: ChaCha8Rng::seed_from_u64(config.seed ^ FAULT_STREAM),
+            wire_stats: WireStats::default(),
             config,
         })
+    }
+
+    /// Fault injection: faults of the wire from the next exchange on (lifecycle frames, enable
+    /// and disable, stay clean). Refuses a field out of range, naming it.
+    pub fn set_wire_faults(&mut self, faults: WireFaults) -> Result<(), (&'static str, f64)> {
+        if let Some(bad) = faults.invalid_field() {
+            return Err(bad);
+        }
+        self.wire_faults = faults;
+        Ok(())
+    }
+
+    /// What the wire did so far.
+    pub fn wire_stats(&self) -> WireStats {
+        self.wire_stats
+    }
+
+    /// Fault injection: firmware fault bits reported in every reply of `motor` (in addition to
+    /// its own over-temperature bit); `ErrorFlags::NONE` clears them. The motor keeps driving.
+    /// Returns false if there is no such simulated motor.
+    pub fn set_error_flags(&mut self, motor: MotorId, flags: ErrorFlags) -> bool {
+        match self.firmware.iter_mut().find(|f| f.motor.spec.id == motor) {
+            Some(f) => {
+                f.injected_errors = flags;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Fault injection: set the winding temperature of `motor` (a hot motor); the thermal model
+    /// and the firmware's over-temperature switch carry on from there. Returns false if there
+    /// is no such simulated motor or the temperature is not finite.
+    pub fn set_temperature_c(&mut self, motor: MotorId, temperature_c: f64) -> bool {
+        if !temperature_c.is_finite() {
+            return false;
+        }
+        match self.firmware.iter_mut().find(|f| f.motor.spec.id == motor) {
+            Some(f) => {
+                f.temperature_c = temperature_c;
+                true
+            }
+            None => false,
+        }
     }
 
     /// Record every frame on the simulated wire into `tap` (diagnostics, tests).
@@ -649,6 +823,70 @@ impl<P: JointPlant> SimBus<P> {
         bits[bus] += frame_bits_exact(reply_frame.id, &reply_frame.data).unwrap_or(0);
         self.record(bus, Direction::ToHost, &reply_frame);
         a1::decode_reply(reply_frame.id, &reply_frame.data).ok()
+    }
+
+    /// What the wire does to one frame: `None` delivers it intact.
+    fn wire_fault(&mut self) -> Option<WireFault> {
+        let f = self.wire_faults;
+        if f.loss_probability > 0.0 && self.fault_rng.random::<f64>() < f.loss_probability {
+            self.wire_stats.lost += 1;
+            return Some(WireFault::Lost);
+        }
+        if f.corrupt_probability > 0.0 && self.fault_rng.random::<f64>() < f.corrupt_probability {
+            self.wire_stats.corrupted += 1;
+            let damage = match self.fault_rng.random_range(0..3u8) {
+                0 => Corruption::Length(self.fault_rng.random_range(0..a1::codec::FRAME_LEN)),
+                1 => Corruption::ReservedMode,
+                _ => Corruption::Id,
+            };
+            return Some(WireFault::Corrupted(damage));
+        }
+        None
+    }
+
+    /// [`Self::transmit`] through the faulty wire: a command or reply may be lost, corrupted
+    /// (then rejected by the firmware's or the host's decoder) or, for a reply, delayed past
+    /// `budget` (then missing).
+    fn transmit_faulty(
+        &mut self,
+        bus: usize,
+        frame: &Frame,
+        bits: &mut [u32; MAX_BUSES],
+        budget: Duration,
+    ) -> Option<Reply> {
+        let model = self.config.model;
+        // Host → motor. A lost frame still took its bus time (the receiver missed it).
+        bits[bus] += frame_bits_exact(frame.id, &frame.data).unwrap_or(0);
+        self.record(bus, Direction::ToMotor, frame);
+        let (id, data, len) = match self.wire_fault() {
+            Some(WireFault::Lost) => return None,
+            Some(WireFault::Corrupted(damage)) => corrupt(frame, damage),
+            None => (frame.id, frame.data, frame.data.len()),
+        };
+        let reply_frame = self
+            .firmware
+            .iter_mut()
+            .filter(|f| f.motor.spec.bus == bus)
+            .find_map(|f| f.receive_bytes(id, &data[..len], &model))?;
+        // Motor → host.
+        bits[bus] += frame_bits_exact(reply_frame.id, &reply_frame.data).unwrap_or(0);
+        self.record(bus, Direction::ToHost, &reply_frame);
+        let (id, data, len) = match self.wire_fault() {
+            Some(WireFault::Lost) => return None,
+            Some(WireFault::Corrupted(damage)) => corrupt(&reply_frame, damage),
+            None => (reply_frame.id, reply_frame.data, reply_frame.data.len()),
+        };
+        let f = self.wire_faults;
+        if f.delay_probability > 0.0 && self.fault_rng.random::<f64>() < f.delay_probability {
+            self.wire_stats.delayed += 1;
+            let arrival = bits_to_duration(bits[bus], self.config.bitrate_bps)
+                + Duration::from_secs_f64(f.delay_s);
+            if arrival > budget {
+                self.wire_stats.delayed_late += 1;
+                return None;
+            }
+        }
+        a1::decode_reply(id, &data[..len]).ok()
     }
 
     fn record(&self, bus: usize, direction: Direction, frame: &Frame) {
@@ -758,8 +996,14 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
         let (frames, buses, saturation) = self.table.prepare(commands, replies)?;
         let mut bits = [0u32; MAX_BUSES];
         let mut missing = None;
+        let clean = self.wire_faults.is_clean();
         for i in 0..commands.len() {
-            match self.transmit(buses[i], &frames[i], &mut bits) {
+            let reply = if clean {
+                self.transmit(buses[i], &frames[i], &mut bits)
+            } else {
+                self.transmit_faulty(buses[i], &frames[i], &mut bits, budget)
+            };
+            match reply {
                 Some(reply) => replies[i] = reply,
                 None => {
                     missing.get_or_insert(BusError::MissingReply {
@@ -1080,6 +1324,131 @@ mod tests {
         assert_eq!(r[0].motor, id(1));
         assert_eq!(r[2].motor, id(3));
         assert_eq!(r[1].motor, id(9), "untouched slot");
+    }
+
+    #[test]
+    fn every_corruption_is_rejected_by_the_decoders() {
+        let m = id(5);
+        let reply = encode_reply(&Reply::zeroed(m)).unwrap().frame;
+        let command = a1::encode_command(&Command::pd(m, 0.1, 0.0, 10.0, 0.5, 0.0))
+            .unwrap()
+            .frame;
+        let special = a1::encode_special(m, Special::Enable);
+        let damages = [
+            Corruption::Length(0),
+            Corruption::Length(7),
+            Corruption::ReservedMode,
+            Corruption::Id,
+        ];
+        for damage in damages {
+            let (id, data, len) = corrupt(&reply, damage);
+            assert!(a1::decode_reply(id, &data[..len]).is_err(), "{damage:?}");
+            for host in [command, special] {
+                let (id, data, len) = corrupt(&host, damage);
+                assert!(decode_host_frame(id, &data[..len]).is_err(), "{damage:?}");
+            }
+        }
+        // Length(n) never delivers all 8 bytes.
+        assert_eq!(corrupt(&reply, Corruption::Length(99)).2, 7);
+    }
+
+    #[test]
+    fn wire_loss_matches_its_probability_and_every_lost_frame_is_a_missing_reply() {
+        let mut bus = sim(2, 2, 0.0, 21);
+        active(&mut bus);
+        let p = 0.1;
+        bus.set_wire_faults(WireFaults {
+            loss_probability: p,
+            corrupt_probability: p,
+            ..WireFaults::NONE
+        })
+        .unwrap();
+        let cmds = [1, 2].map(|n| Command::damping(id(n), 1.0));
+        let mut r = [Reply::zeroed(id(1)); 2];
+        let n = 5_000;
+        let mut missing = 0u64;
+        for _ in 0..n {
+            r.iter_mut().for_each(|x| x.q_rad = f64::NAN);
+            let result = bus.exchange(&cmds, &mut r, PERIOD);
+            let gone = r.iter().filter(|x| x.q_rad.is_nan()).count() as u64;
+            assert_eq!(result.is_err(), gone > 0);
+            missing += gone;
+        }
+        let stats = bus.wire_stats();
+        // Each lost or corrupted frame costs exactly one reply (a lost command has no reply).
+        assert_eq!(missing, stats.lost + stats.corrupted);
+        // P(reply missing) = 1 − (1 − p)⁴ (command and reply, each lost or corrupted) = 0.344;
+        // over 10 000 replies the standard error is 0.005: allow 4σ.
+        let rate = missing as f64 / (2 * n) as f64;
+        let expected = 1.0 - (1.0 - p).powi(4);
+        assert!((rate - expected).abs() < 0.02, "{rate} vs {expected}");
+        // Seeded: the same seed loses the same frames.
+        let run = |seed| {
+            let mut bus = sim(2, 2, 0.0, seed);
+            active(&mut bus);
+            bus.set_wire_faults(WireFaults {
+                loss_probability: 0.05,
+                ..WireFaults::NONE
+            })
+            .unwrap();
+            let mut r = [Reply::zeroed(id(1)); 2];
+            (0..300)
+                .map(|_| bus.exchange(&cmds, &mut r, PERIOD).is_ok())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(run(3), run(3));
+        assert_ne!(run(3), run(4));
+    }
+
+    #[test]
+    fn a_delayed_reply_is_missing_only_past_the_budget() {
+        let cmds = [Command::damping(id(1), 1.0)];
+        for (delay_s, late) in [(0.5e-3, false), (1.5e-3, true)] {
+            let mut bus = sim(1, 1, 0.0, 22);
+            active(&mut bus);
+            bus.set_wire_faults(WireFaults {
+                delay_probability: 1.0,
+                delay_s,
+                ..WireFaults::NONE
+            })
+            .unwrap();
+            let mut r = [Reply::zeroed(id(1))];
+            // One exchange is ≈ 0.22 ms of bus time: 0.22 + 0.5 < 1 ms, 0.22 + 1.5 > 1 ms.
+            let result = bus.exchange(&cmds, &mut r, PERIOD);
+            assert_eq!(result.is_err(), late, "delay {delay_s}");
+            let stats = bus.wire_stats();
+            assert_eq!(stats.delayed, 1);
+            assert_eq!(stats.delayed_late, u64::from(late));
+        }
+        let mut bus = sim(1, 1, 0.0, 22);
+        let bad = WireFaults {
+            loss_probability: 1.5,
+            ..WireFaults::NONE
+        };
+        assert_eq!(bus.set_wire_faults(bad), Err(("loss_probability", 1.5)));
+    }
+
+    #[test]
+    fn injected_error_flags_and_temperature_show_in_the_replies() {
+        let mut bus = sim(2, 1, 0.0, 23);
+        active(&mut bus);
+        let cmds = [1, 2].map(|n| Command::damping(id(n), 1.0));
+        let mut r = [Reply::zeroed(id(1)); 2];
+        assert!(bus.set_error_flags(id(2), ErrorFlags::ENCODER));
+        assert!(bus.set_temperature_c(id(1), 87.0));
+        assert!(!bus.set_temperature_c(id(9), 87.0));
+        bus.exchange(&cmds, &mut r, PERIOD).unwrap();
+        assert_eq!(r[1].errors, ErrorFlags::ENCODER);
+        assert!(r[0].errors.is_empty());
+        // Reply quantum of the temperature is 1 °C; the winding cools a little in 1 ms.
+        assert!(
+            (r[0].temperature_c - 87.0).abs() <= 1.0,
+            "{}",
+            r[0].temperature_c
+        );
+        bus.set_error_flags(id(2), ErrorFlags::NONE);
+        bus.exchange(&cmds, &mut r, PERIOD).unwrap();
+        assert!(r[1].errors.is_empty());
     }
 
     #[test]

@@ -409,3 +409,104 @@ fn same_seed_gives_bit_identical_runs() {
     assert_eq!(a, run(1));
     assert_ne!(a, run(2));
 }
+
+/// World velocity of the centre of mass, m/s (the belt-frame velocity by a finite difference).
+fn com_velocity_mps(s: &RobotSim) -> [f64; 2] {
+    let eps = 1e-7;
+    let q1: Vec<f64> = s.q().iter().zip(s.dq()).map(|(q, v)| q + eps * v).collect();
+    let c0 = s.model().center_of_mass(s.q()).unwrap();
+    let c1 = s.model().center_of_mass(&q1).unwrap();
+    [
+        (c1[0] - c0[0]) / eps - s.config().belt_speed_mps,
+        (c1[1] - c0[1]) / eps,
+    ]
+}
+
+#[test]
+fn a_push_in_flight_changes_the_momentum_by_its_impulse() {
+    // No gravity, no contact: the only external force is the push at the hip axis, so the
+    // centre of mass gains Δv = F·d / M whatever the body rotates.
+    let mut m = adam();
+    m.gravity_mps2 = 0.0;
+    let mut s = RobotSim::new(&m, RobotSimConfig::default()).unwrap();
+    let mut q = s.q().to_vec();
+    q[1] += 1.0;
+    s.set_state(&q, &vec![0.0; q.len()]).unwrap();
+    let mass = s.model().total_mass_kg();
+    let (force, duration) = ([30.0, -12.0], 0.2);
+    s.push(force, duration).unwrap();
+    for _ in 0..300 {
+        s.step(&[0.0; 4], 1e-3).unwrap();
+    }
+    let v = com_velocity_mps(&s);
+    for k in 0..2 {
+        let dv = force[k] * duration / mass;
+        // The push acts on whole 0.1 ms sim steps (one step more or less in 0.2 s is 5e-4),
+        // and semi-implicit Euler conserves momentum only to O(h) on rotating bodies: 2e-3.
+        assert!(
+            (v[k] - dv).abs() < 2e-3 * dv.abs(),
+            "axis {k}: {} vs {dv}",
+            v[k]
+        );
+    }
+    assert!(s.push([f64::NAN, 0.0], 0.1).is_err());
+}
+
+#[test]
+fn a_belt_step_carries_the_stance_feet_at_the_new_speed() {
+    let mut s = sim();
+    let target = joints(&s);
+    for _ in 0..200 {
+        let u = pd(&s, &target, 300.0, 4.0);
+        s.step(&u, 1e-3).unwrap();
+    }
+    let com_v = |s: &RobotSim| com_velocity_mps(s)[0];
+    let v_before = com_v(&s);
+    s.set_belt_speed(0.3).unwrap();
+    // The impulse through the pinned feet drags the robot back, by less than the step (the
+    // legs give way: the torso keeps part of its world velocity).
+    let v_after = com_v(&s);
+    println!("belt step 0 → 0.3 m/s: CoM world velocity {v_before:+.4} → {v_after:+.4} m/s");
+    assert!(
+        v_after < v_before && v_after > v_before - 0.3,
+        "{v_before} → {v_after}"
+    );
+    assert!(s.in_stance(Side::Left) && s.in_stance(Side::Right));
+    let x0 = s.foot_position_m(Side::Left)[0];
+    let t0 = s.time_s();
+    for _ in 0..500 {
+        let u = pd(&s, &target, 300.0, 4.0);
+        s.step(&u, 1e-3).unwrap();
+    }
+    let dt = s.time_s() - t0;
+    assert!(s.in_stance(Side::Left));
+    assert!((s.foot_position_m(Side::Left)[0] - (x0 - 0.3 * dt)).abs() < 1e-9);
+    assert!(s.set_belt_speed(f64::INFINITY).is_err());
+}
+
+#[test]
+fn imu_faults_drop_spike_and_freeze_the_simulated_imu() {
+    use drivers::imu::{ImuError, ImuFault};
+    let mut s = sim();
+    s.attach_imu(ImuNoise::default(), 3);
+    let mut out = ImuSample::default();
+    s.step(&[0.0; 4], 1e-3).unwrap();
+    s.read(&mut out).unwrap();
+    let held = out;
+    s.set_imu_fault(ImuFault::Frozen);
+    for _ in 0..3 {
+        s.step(&[0.0; 4], 1e-3).unwrap();
+        s.read(&mut out).unwrap();
+        assert_eq!(out.gyro_pitch_rad_s, held.gyro_pitch_rad_s);
+        assert_eq!(out.accel_z_mps2, held.accel_z_mps2);
+    }
+    s.set_imu_fault(ImuFault::Dropout);
+    assert_eq!(s.read(&mut out), Err(ImuError::Timeout));
+    s.set_imu_fault(ImuFault::Spike { gyro_rad_s: 100.0 });
+    s.read(&mut out).unwrap();
+    assert!(out.gyro_pitch_rad_s > 99.0);
+    s.set_imu_fault(ImuFault::None);
+    s.step(&[0.0; 4], 1e-3).unwrap();
+    s.read(&mut out).unwrap();
+    assert!(out.gyro_pitch_rad_s.abs() < 1.0 && out.gyro_pitch_rad_s != held.gyro_pitch_rad_s);
+}

@@ -20,7 +20,8 @@
 //! | [`replay`] | deterministic replay of a log through the controller (`adam replay`), fixtures |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
-//! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth |
+//! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth; fault injection and the soak |
+//! | [`faults`] | fault profiles (TOML or built-in): wire faults, scheduled and random faults, seeded schedule |
 //!
 //! ## Data flow of one tick
 //! ```text
@@ -64,8 +65,10 @@ pub mod config;
 pub mod controller;
 mod error;
 pub mod estimator;
+pub mod faults;
 pub mod io;
 pub mod log;
+mod log_guard;
 pub mod log_read;
 pub mod operator;
 pub mod replay;

@@ -172,6 +172,7 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     if !bytes.starts_with(MCAP_MAGIC) {
         return Err(log_err(path, "not an MCAP file (no leading MCAP magic)"));
     }
+    crate::log_guard::check_lengths(path, &bytes)?;
     Ok(bytes)
 }
 

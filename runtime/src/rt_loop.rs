@@ -85,6 +85,9 @@ pub struct LoopOptions {
     /// Begin in Walk at the first tick (see [`Controller::begin_walk_at_step_start`]): only for
     /// a backend that starts in the gait's planned post-impact state.
     pub start_walking: bool,
+    /// End the run this long after a safety trip (the soak then restarts on a fresh robot);
+    /// `None`: run the whole duration.
+    pub stop_after_trip_s: Option<f64>,
 }
 
 impl LoopOptions {
@@ -98,6 +101,7 @@ impl LoopOptions {
             publish: false,
             realtime: false,
             start_walking: false,
+            stop_after_trip_s: None,
         }
     }
 }
@@ -438,6 +442,8 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     }
     let t0 = clock.now_s();
     let mut deadline = t0;
+    let mut ran = 0u64;
+    let mut tripped_at_s: Option<f64> = None;
 
     for tick in 0..ticks {
         let t = clock.now_s() - t0;
@@ -531,6 +537,15 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
                 tx.push(LogRecord::Sample(sample));
             }
         }
+        ran = tick + 1;
+        if status.new_trip {
+            tripped_at_s = Some(t);
+        }
+        if let (Some(linger_s), Some(at_s)) = (options.stop_after_trip_s, tripped_at_s) {
+            if t - at_s >= linger_s {
+                break;
+            }
+        }
         // Absolute deadlines; when more than a period late, re-anchor instead of bursting.
         deadline += period_s;
         let now = clock.now_s();
@@ -557,7 +572,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     #[cfg(not(feature = "iceoryx2"))]
     let publish_failures = 0;
     let summary = RunSummary {
-        ticks,
+        ticks: ran,
         end_time_s: input.t_s,
         overruns,
         max_overrun_streak: max_streak,

@@ -1,4 +1,4 @@
-//! The runtime on the simulated ADAM: [`drivers::sim::RobotSim`] as the [`JointPlant`] behind a
+//! The runtime on the simulated ADAM: [`drivers::sim::RobotSim`] as the [`JointPlant`](drivers::sim_bus::JointPlant) behind a
 //! [`SimBus`] (every command and reply goes through the A1 CAN codec and the simulated firmware),
 //! its torso IMU as the runtime's [`crate::Imu`], on a treadmill, under a simulated clock.
 //!
@@ -9,16 +9,31 @@
 //! ```
 //! `adam demo`, `adam run --backend sim` and the end-to-end tests call [`walk`].
 //!
+//! # Faults and the soak
+//! With [`SimWalkOptions::faults`] the backend is a [`FaultySim`]: before each exchange it starts
+//! and ends the faults of the profile's seeded schedule ([`crate::faults`]) at simulated time —
+//! wire faults in the [`SimBus`], motor faults in its firmware, pushes, belt steps and IMU
+//! faults in the [`RobotSim`] — and a [`FaultClock`] wakes the loop late during overrun faults.
+//! Applying a fault allocates nothing (the schedule is built before the loop).
+//! [`soak`] walks for a long time under a profile: after each trip it lets the robot settle in
+//! Damping for [`SOAK_LINGER_S`], then resets: a fresh controller (Reset) on the robot re-placed
+//! in the gait's post-impact state, walking at once (Start → Walk: a robot at rest in Stand
+//! cannot start a step with the state-based phase, see below), and counts trips by reason.
+//!
 //! The run starts in the gait's planned post-impact state (the robot already walking at the
 //! gait speed, its first stance foot just down), not from standing: Ramp and Stand end in a
 //! double-support pose at rest, from which the state-based phase cannot start a step.
 
+use crate::faults::{Fault, FaultProfile, ScheduledFault};
 use crate::io::Imu;
-use crate::rt_loop::{LoopOptions, MonotonicClock, RunSummary, SimulatedClock};
+use crate::rt_loop::{Clock, LoopOptions, MonotonicClock, RunSummary};
 use crate::{Result, RuntimeError, Setup};
-use drivers::imu::ImuNoise;
+use core::time::Duration;
+use drivers::a1::{Command, ErrorFlags, MotorId, Reply};
+use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
+use drivers::imu::{ImuFault, ImuNoise};
 use drivers::sim::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
-use drivers::sim_bus::{A1Model, SimBus, SimConfig, SimMotor};
+use drivers::sim_bus::{A1Model, SimBus, SimConfig, SimMotor, WireStats};
 use model::Side;
 use std::path::PathBuf;
 
@@ -40,6 +55,10 @@ pub struct SimWalkOptions {
     /// Pace the loop by the wall clock at the config's rate (measures loop jitter) instead of
     /// running as fast as the CPU allows under a simulated clock.
     pub real_time: bool,
+    /// Faults to inject (`None`: none). Overrun faults need the simulated clock.
+    pub faults: Option<FaultProfile>,
+    /// End the run this long after a safety trip (`None`: run the whole duration).
+    pub stop_after_trip_s: Option<f64>,
 }
 
 impl SimWalkOptions {
@@ -53,6 +72,8 @@ impl SimWalkOptions {
             seed: 1,
             log_path: None,
             real_time: false,
+            faults: None,
+            stop_after_trip_s: None,
         }
     }
 }
@@ -86,6 +107,23 @@ pub struct SimWalkReport {
     pub sim_fault_s: Option<f64>,
     /// Friction-cone violations reported by the simulator (μ = 1; the foot stays pinned).
     pub friction_exceeded: usize,
+    /// Distance walked over the belt: the sum of the step lengths before any fall, m.
+    pub distance_m: f64,
+    /// Faults started from the profile's schedule.
+    pub faults_started: u64,
+    /// What the simulated CAN wire did.
+    pub wire: WireStats,
+}
+
+impl SimWalkReport {
+    /// Time of the first transition into Damping, s (the trip's effect), if any.
+    pub fn damping_at_s(&self) -> Option<f64> {
+        self.summary
+            .transitions
+            .iter()
+            .find(|(_, _, to)| *to == crate::controller::ControlState::Damping)
+            .map(|(t, _, _)| *t)
+    }
 }
 
 /// The runtime's IMU on the simulator's torso IMU (attached with [`RobotSim::attach_imu`]);
@@ -203,25 +241,42 @@ pub fn walk_with_operator(
     options: &SimWalkOptions,
     operator: Option<crate::operator::OperatorReceiver>,
 ) -> Result<SimWalkReport> {
-    let backend = sim_backend(setup, options)?;
-    let belt_speed_mps = backend.plant().config().belt_speed_mps;
-    let x0_m = backend.plant().base_position_m()[0];
+    let bus = sim_backend(setup, options)?;
+    let belt_speed_mps = bus.plant().config().belt_speed_mps;
+    let x0_m = bus.plant().base_position_m()[0];
+    let period_s = 1.0 / setup.config.loop_.rate_hz;
+    let none = FaultProfile::none();
+    let profile = options.faults.as_ref().unwrap_or(&none);
+    profile.validate("fault profile")?;
+    let schedule = profile.schedule(options.duration_s, period_s, options.seed);
+    if options.real_time
+        && schedule
+            .iter()
+            .any(|f| matches!(f.fault, Fault::Overrun { .. }))
+    {
+        return Err(RuntimeError::InvalidField {
+            origin: "fault profile".into(),
+            field: "events/random: overrun".into(),
+            value: "real_time = true".into(),
+            reason: "overrun faults need the simulated clock".into(),
+        });
+    }
+    let clock = FaultClock::new(&schedule);
+    let backend = FaultySim::new(setup, bus, profile, schedule)?;
     let mut loop_options = LoopOptions::simulation(options.duration_s);
     loop_options.start_walking = true;
     loop_options.log_path = options.log_path.clone();
+    loop_options.stop_after_trip_s = options.stop_after_trip_s;
     // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
     loop_options.realtime = options.real_time;
     let (summary, backend) = if options.real_time {
         crate::run(setup, backend, MonotonicClock, loop_options, operator)?
     } else {
-        crate::run(
-            setup,
-            backend,
-            SimulatedClock::default(),
-            loop_options,
-            operator,
-        )?
+        crate::run(setup, backend, clock, loop_options, operator)?
     };
+    let faults_started = backend.started;
+    let wire = backend.bus.wire_stats();
+    let backend = backend.bus;
     let sim = backend.plant();
     let mut report = SimWalkReport {
         duration_s: options.duration_s,
@@ -236,6 +291,9 @@ pub fn walk_with_operator(
         fall: None,
         sim_fault_s: None,
         friction_exceeded: 0,
+        distance_m: 0.0,
+        faults_started,
+        wire,
         summary,
     };
     // The initial state is just after a touchdown of the gait's stance foot.
@@ -264,11 +322,416 @@ pub fn walk_with_operator(
             _ => {}
         }
     }
+    report.distance_m = length_sum_m;
     if report.steps > 0 {
         let n = report.steps as f64;
         report.mean_step_length_m = length_sum_m / n;
         report.mean_step_duration_s = duration_sum_s / n;
         report.speed_mps = length_sum_m / duration_sum_s;
+    }
+    Ok(report)
+}
+
+/// The simulated robot with faults applied on schedule: a loop backend ([`MotorBus`] + [`Imu`]).
+///
+/// Before each exchange, at the simulated time of the period about to run, faults whose end has
+/// come are healed, then faults whose start has come are applied. A hot motor is not cooled at
+/// the end of its fault (the thermal model cools it); a push ends by itself. Overlapping faults
+/// of one kind: the first to end heals both (random faults never overlap).
+pub struct FaultySim {
+    bus: SimBus<RobotSim>,
+    schedule: Vec<ScheduledFault>,
+    ended: Vec<bool>,
+    next: usize,
+    first_open: usize,
+    motors: [MotorId; 4],
+    belt_speed_mps: f64,
+    half_period_s: f64,
+    started: u64,
+}
+
+impl FaultySim {
+    /// Wrap `bus` with the wire faults of `profile` and the faults of `schedule`.
+    pub fn new(
+        setup: &Setup,
+        mut bus: SimBus<RobotSim>,
+        profile: &FaultProfile,
+        schedule: Vec<ScheduledFault>,
+    ) -> Result<Self> {
+        bus.set_wire_faults(profile.wire.to_wire_faults())
+            .map_err(|(field, value)| RuntimeError::InvalidField {
+                origin: "fault profile".into(),
+                field: format!("wire.{field}"),
+                value: value.to_string(),
+                reason: "out of range".into(),
+            })?;
+        let ids = setup
+            .config
+            .leg_motors
+            .iter()
+            .enumerate()
+            .map(|(slot, m)| {
+                MotorId::new(m.id).ok_or_else(|| RuntimeError::InvalidField {
+                    origin: "runtime config".into(),
+                    field: format!("leg_motors[{slot}].id"),
+                    value: m.id.to_string(),
+                    reason: "must be 1..=127".into(),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let count = ids.len();
+        let motors: [MotorId; 4] = ids.try_into().map_err(|_| RuntimeError::InvalidField {
+            origin: "runtime config".into(),
+            field: "leg_motors".into(),
+            value: format!("{count} motors"),
+            reason: "the simulated robot has 4 leg motors".into(),
+        })?;
+        Ok(Self {
+            belt_speed_mps: bus.plant().config().belt_speed_mps,
+            half_period_s: 0.5 / bus.config().control_rate_hz,
+            ended: vec![false; schedule.len()],
+            schedule,
+            next: 0,
+            first_open: 0,
+            motors,
+            started: 0,
+            bus,
+        })
+    }
+
+    /// The simulated bus (and through it the robot).
+    pub fn bus(&self) -> &SimBus<RobotSim> {
+        &self.bus
+    }
+
+    /// Faults started so far.
+    pub fn started(&self) -> u64 {
+        self.started
+    }
+
+    /// Heal the faults that have ended and apply those that have begun at `t_s`.
+    fn apply(&mut self, t_s: f64) {
+        let now = t_s + self.half_period_s;
+        for i in self.first_open..self.next {
+            if !self.ended[i] && self.schedule[i].end_s <= now {
+                self.ended[i] = true;
+                self.set(self.schedule[i].fault, false);
+            }
+        }
+        while self.first_open < self.next && self.ended[self.first_open] {
+            self.first_open += 1;
+        }
+        while self.next < self.schedule.len() && self.schedule[self.next].start_s <= now {
+            let f = self.schedule[self.next];
+            self.next += 1;
+            self.started += 1;
+            self.set(f.fault, true);
+            if let Fault::Push {
+                force_x_n,
+                force_z_n,
+            } = f.fault
+            {
+                // Non-finite forces were refused by the profile's validation.
+                let _ = self
+                    .bus
+                    .plant_mut()
+                    .push([force_x_n, force_z_n], f.end_s - f.start_s);
+            }
+        }
+    }
+
+    /// Apply (`on`) or heal one fault.
+    fn set(&mut self, fault: Fault, on: bool) {
+        let imu = |f| if on { f } else { ImuFault::None };
+        match fault {
+            Fault::SilentMotor { slot } => {
+                self.bus.set_silent(self.motors[slot], on);
+            }
+            Fault::HotMotor {
+                slot,
+                temperature_c,
+            } => {
+                if on {
+                    self.bus.set_temperature_c(self.motors[slot], temperature_c);
+                }
+            }
+            Fault::MotorFlags { slot, flags } => {
+                let flags = if on {
+                    ErrorFlags(flags)
+                } else {
+                    ErrorFlags::NONE
+                };
+                self.bus.set_error_flags(self.motors[slot], flags);
+            }
+            Fault::ImuDropout => self.bus.plant_mut().set_imu_fault(imu(ImuFault::Dropout)),
+            Fault::ImuSpike { gyro_rad_s } => self
+                .bus
+                .plant_mut()
+                .set_imu_fault(imu(ImuFault::Spike { gyro_rad_s })),
+            Fault::ImuFrozen => self.bus.plant_mut().set_imu_fault(imu(ImuFault::Frozen)),
+            Fault::BeltSpeed { speed_mps } => {
+                let v = if on { speed_mps } else { self.belt_speed_mps };
+                // A finite speed cannot be refused; a faulted simulator reports itself
+                // through `SimEvent::Fault`.
+                let _ = self.bus.plant_mut().set_belt_speed(v);
+            }
+            // The clock's fault; a push ends by itself.
+            Fault::Overrun { .. } | Fault::Push { .. } => {}
+        }
+    }
+}
+
+impl MotorBus for FaultySim {
+    fn state(&self) -> Lifecycle {
+        self.bus.state()
+    }
+    fn bus_count(&self) -> usize {
+        self.bus.bus_count()
+    }
+    fn configure(&mut self, motors: &[MotorSpec]) -> drivers::bus::Result<()> {
+        self.bus.configure(motors)
+    }
+    fn activate(&mut self) -> drivers::bus::Result<()> {
+        self.bus.activate()
+    }
+    fn exchange(
+        &mut self,
+        commands: &[Command],
+        replies: &mut [Reply],
+        budget: Duration,
+    ) -> drivers::bus::Result<ExchangeReport> {
+        let t_s = self.bus.time_s();
+        self.apply(t_s);
+        self.bus.exchange(commands, replies, budget)
+    }
+    fn deactivate(&mut self) -> drivers::bus::Result<()> {
+        self.bus.deactivate()
+    }
+}
+
+impl Imu for FaultySim {
+    fn read_imu(&mut self, t_s: f64) -> Option<crate::ImuSample> {
+        self.bus.read_imu(t_s)
+    }
+    fn true_pitch_rad(&self) -> Option<f64> {
+        self.bus.true_pitch_rad()
+    }
+}
+
+/// Simulated time that wakes the loop late inside overrun faults: a deadline `d` in
+/// `[start, end)` of an [`Fault::Overrun`] wakes at `d + late`. Outside them it is
+/// [`crate::rt_loop::SimulatedClock`]: sleeping jumps to the deadline, time never goes back.
+#[derive(Clone, Debug, Default)]
+pub struct FaultClock {
+    now_s: f64,
+    windows: Vec<(f64, f64, f64)>,
+}
+
+impl FaultClock {
+    /// The overrun faults of `schedule`.
+    pub fn new(schedule: &[ScheduledFault]) -> Self {
+        let windows = schedule
+            .iter()
+            .filter_map(|f| match f.fault {
+                Fault::Overrun { late_ms } => Some((f.start_s, f.end_s, late_ms * 1e-3)),
+                _ => None,
+            })
+            .collect();
+        Self {
+            now_s: 0.0,
+            windows,
+        }
+    }
+}
+
+impl Clock for FaultClock {
+    fn now_s(&mut self) -> f64 {
+        self.now_s
+    }
+    fn sleep_until(&mut self, deadline_s: f64) {
+        let late_s = self
+            .windows
+            .iter()
+            .find(|(a, b, _)| (*a..*b).contains(&deadline_s))
+            .map_or(0.0, |w| w.2);
+        self.now_s = self.now_s.max(deadline_s + late_s);
+    }
+}
+
+/// How long the soak lets the robot lie in Damping after a trip before it resets, s.
+pub const SOAK_LINGER_S: f64 = 0.5;
+
+/// How to soak.
+#[derive(Clone, Debug)]
+pub struct SoakOptions {
+    /// Simulated time to walk, s.
+    pub duration_s: f64,
+    /// Faults to inject.
+    pub profile: FaultProfile,
+    /// Seed of the first episode (episode `k` uses `seed + k`).
+    pub seed: u64,
+    /// Keep each episode's MCAP log here as `episode-NNN.mcap` (`None`: a temporary file,
+    /// removed at the end; the log still runs, so its drops are measured).
+    pub log_dir: Option<PathBuf>,
+}
+
+/// What the soak saw.
+#[derive(Clone, Debug, Default)]
+pub struct SoakReport {
+    /// Walks started (1 + resets).
+    pub episodes: u64,
+    /// Ticks run.
+    pub ticks: u64,
+    /// Simulated time, s.
+    pub sim_time_s: f64,
+    /// Deadlines missed.
+    pub overruns: u64,
+    /// Trips by reason ([`crate::safety::Trip::name`]), in order of first occurrence.
+    pub trips: Vec<(&'static str, u64)>,
+    /// Simulator falls with no safety trip before them.
+    pub falls_without_trip: u64,
+    /// Log records dropped (queue full).
+    pub log_drops: u64,
+    /// MCAP messages written.
+    pub log_messages: u64,
+    /// Worst controller tick compute time, ns.
+    pub worst_tick_ns: u64,
+    /// Distance walked over the belt (sum of step lengths), m.
+    pub distance_m: f64,
+    /// Steps walked.
+    pub steps: u64,
+    /// Faults injected from the schedule.
+    pub faults: u64,
+    /// Replies missing.
+    pub missing_replies: u64,
+    /// What the wire did.
+    pub wire: WireStats,
+}
+
+impl SoakReport {
+    /// Trips of one reason.
+    pub fn trips_of(&self, reason: &str) -> u64 {
+        self.trips
+            .iter()
+            .find(|(r, _)| *r == reason)
+            .map_or(0, |(_, n)| *n)
+    }
+
+    fn add(&mut self, report: &SimWalkReport, period_s: f64) {
+        let s = &report.summary;
+        self.episodes += 1;
+        self.ticks += s.ticks;
+        self.sim_time_s += s.ticks as f64 * period_s;
+        self.overruns += s.overruns;
+        if let Some(trip) = s.trip {
+            match self.trips.iter_mut().find(|(r, _)| *r == trip.name()) {
+                Some((_, n)) => *n += 1,
+                None => self.trips.push((trip.name(), 1)),
+            }
+        } else if report.fall.is_some() {
+            self.falls_without_trip += 1;
+        }
+        if let Some(log) = &s.log {
+            self.log_drops += log.dropped;
+            self.log_messages += log.messages;
+        }
+        self.worst_tick_ns = self.worst_tick_ns.max(s.tick_times.max_ns);
+        self.distance_m += report.distance_m;
+        self.steps += report.steps as u64;
+        self.faults += report.faults_started;
+        self.missing_replies += s.missing_replies;
+        self.wire.lost += report.wire.lost;
+        self.wire.corrupted += report.wire.corrupted;
+        self.wire.delayed += report.wire.delayed;
+        self.wire.delayed_late += report.wire.delayed_late;
+    }
+}
+
+impl std::fmt::Display for SoakReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let row = |f: &mut std::fmt::Formatter<'_>, k: &str, v: String| writeln!(f, "{k:<28} {v}");
+        row(f, "simulated time", format!("{:.1} s", self.sim_time_s))?;
+        row(f, "ticks", self.ticks.to_string())?;
+        row(f, "overruns", self.overruns.to_string())?;
+        row(f, "episodes (walk starts)", self.episodes.to_string())?;
+        row(f, "faults injected", self.faults.to_string())?;
+        let total: u64 = self.trips.iter().map(|(_, n)| n).sum();
+        row(f, "trips", total.to_string())?;
+        for (reason, n) in &self.trips {
+            row(f, &format!("  {reason}"), n.to_string())?;
+        }
+        row(
+            f,
+            "falls without a trip",
+            self.falls_without_trip.to_string(),
+        )?;
+        row(
+            f,
+            "CAN frames lost/corrupted",
+            format!("{} / {}", self.wire.lost, self.wire.corrupted),
+        )?;
+        row(f, "replies missing", self.missing_replies.to_string())?;
+        row(
+            f,
+            "log drops",
+            format!("{} of {} messages", self.log_drops, self.log_messages),
+        )?;
+        row(
+            f,
+            "worst tick compute time",
+            format!("{:.1} µs", self.worst_tick_ns as f64 / 1e3),
+        )?;
+        row(
+            f,
+            "distance walked",
+            format!("{:.2} m in {} steps", self.distance_m, self.steps),
+        )?;
+        Ok(())
+    }
+}
+
+/// Walk `options.duration_s` of simulated time under random faults; after each trip, reset
+/// and walk again on a freshly placed robot. `progress` sees the report after each episode.
+pub fn soak(
+    setup: &Setup,
+    options: &SoakOptions,
+    mut progress: impl FnMut(&SoakReport),
+) -> Result<SoakReport> {
+    if !(options.duration_s.is_finite() && options.duration_s > 0.0) {
+        return Err(RuntimeError::InvalidField {
+            origin: "soak".into(),
+            field: "minutes".into(),
+            value: (options.duration_s / 60.0).to_string(),
+            reason: "must be positive and finite".into(),
+        });
+    }
+    options.profile.validate("fault profile")?;
+    let period_s = 1.0 / setup.config.loop_.rate_hz;
+    let temp_log = std::env::temp_dir().join(format!("adam-soak-{}.mcap", std::process::id()));
+    if let Some(dir) = &options.log_dir {
+        std::fs::create_dir_all(dir).map_err(|error| RuntimeError::Io {
+            path: dir.clone(),
+            error,
+        })?;
+    }
+    let mut report = SoakReport::default();
+    // Less than one tick left: done.
+    while options.duration_s - report.sim_time_s >= period_s {
+        let episode = report.episodes;
+        let mut walk_options = SimWalkOptions::new(options.duration_s - report.sim_time_s);
+        walk_options.seed = options.seed.wrapping_add(episode);
+        walk_options.faults = Some(options.profile.clone());
+        walk_options.stop_after_trip_s = Some(SOAK_LINGER_S);
+        walk_options.log_path = Some(match &options.log_dir {
+            Some(dir) => dir.join(format!("episode-{episode:03}.mcap")),
+            None => temp_log.clone(),
+        });
+        let walked = walk(setup, &walk_options)?;
+        report.add(&walked, period_s);
+        progress(&report);
+    }
+    if options.log_dir.is_none() {
+        let _ = std::fs::remove_file(&temp_log);
     }
     Ok(report)
 }
@@ -326,6 +789,14 @@ impl std::fmt::Display for SimWalkReport {
                 rms.to_degrees(),
                 t.pitch_max_abs_rad.to_degrees(),
                 s.last_sample.gyro_bias_rad_s
+            )?;
+        }
+        if self.faults_started > 0 || self.wire != WireStats::default() {
+            let w = &self.wire;
+            writeln!(
+                f,
+                "faults injected {} | CAN frames lost {}, corrupted {}, replies delayed {} ({} past the period)",
+                self.faults_started, w.lost, w.corrupted, w.delayed, w.delayed_late
             )?;
         }
         writeln!(

@@ -30,6 +30,11 @@
 //!   - no contact of other points with the ground, and joint limits are not enforced (no hard
 //!     stops). A torso or knee reaching the ground is a fall ([`SimEvent::Fall`]); the simulation
 //!     continues afterwards but is no longer physical: stop it.
+//! * **Disturbances** (fault injection): [`RobotSim::push`] applies an external force at the
+//!   hip axis for a while (a shove on the torso); [`RobotSim::set_belt_speed`] steps the belt
+//!   speed: the stance foot, pinned to the belt, is jerked with it (an impulse through the
+//!   stance contact, the plastic projection in the `D` metric); [`RobotSim::set_imu_fault`]
+//!   drops, spikes or freezes the IMU output ([`ImuFault`]).
 //! * **Integrator**: semi-implicit (symplectic) Euler at a fixed rate `rate_hz` (10 kHz by
 //!   default, the A1 firmware rate); torques are held over a step. After each step the stance
 //!   feet are projected back onto their anchors (position, then velocity, in the kinetic-energy
@@ -67,7 +72,7 @@
 mod solver;
 
 use crate::bus::MotorSpec;
-use crate::imu::{Imu, ImuError, ImuNoise, ImuSample, NoisyImu};
+use crate::imu::{Imu, ImuError, ImuFault, ImuNoise, ImuSample, NoisyImu};
 use crate::sim_bus::{JointPlant, SimMotor};
 use model::kinematics::BodyStates;
 use model::robot::{BodyInertia, Legs};
@@ -318,6 +323,13 @@ pub struct RobotSim {
     /// since then.
     imu_last: Option<(f64, [f64; 2])>,
     fault_t_s: Option<f64>,
+    /// External force at the hip axis (world x, z) \[N\] and the time it ends \[s\].
+    push: ([f64; 2], f64),
+    /// Belt travel up to `belt_since_t_s` \[m\] (world x of the belt frame's origin then).
+    belt_offset0_m: f64,
+    belt_since_t_s: f64,
+    imu_fault: ImuFault,
+    imu_held: ImuSample,
 }
 
 impl RobotSim {
@@ -376,6 +388,11 @@ impl RobotSim {
             imu: None,
             imu_last: None,
             fault_t_s: None,
+            push: ([0.0; 2], 0.0),
+            belt_offset0_m: 0.0,
+            belt_since_t_s: 0.0,
+            imu_fault: ImuFault::None,
+            imu_held: ImuSample::default(),
             model,
             config,
         };
@@ -443,6 +460,59 @@ impl RobotSim {
         self.max_penetration_m = 0.0;
         self.fault_t_s = None;
         Ok(())
+    }
+
+    /// Push the torso: `force_xz_n` (world x forward, z up) at the hip axis from now for
+    /// `duration_s` (replacing any push still acting). Refuses non-finite values.
+    pub fn push(&mut self, force_xz_n: [f64; 2], duration_s: f64) -> Result<()> {
+        for (field, value) in [
+            ("push.force_x_n", force_xz_n[0]),
+            ("push.force_z_n", force_xz_n[1]),
+            ("push.duration_s", duration_s),
+        ] {
+            if !value.is_finite() || (field == "push.duration_s" && value < 0.0) {
+                return Err(RobotSimError::Config {
+                    field,
+                    value,
+                    reason: "must be finite (a duration ≥ 0)",
+                });
+            }
+        }
+        self.push = (force_xz_n, self.t_s + duration_s);
+        Ok(())
+    }
+
+    /// Step the belt to `speed_mps` now. The belt frame changes speed with it: every velocity
+    /// relative to the belt grows by the step, then the stance feet, pinned to the belt, are
+    /// brought to its speed by the contact impulse (the plastic projection). A robot in the air
+    /// keeps its world velocity.
+    pub fn set_belt_speed(&mut self, speed_mps: f64) -> Result<()> {
+        if !speed_mps.is_finite() {
+            return Err(RobotSimError::Config {
+                field: "belt_speed_mps",
+                value: speed_mps,
+                reason: "must be finite",
+            });
+        }
+        let step = speed_mps - self.config.belt_speed_mps;
+        self.belt_offset0_m = self.belt_offset_m();
+        self.belt_since_t_s = self.t_s;
+        self.config.belt_speed_mps = speed_mps;
+        self.dq[0] += step;
+        // The IMU differentiates the belt-frame velocity: shift its reference too, so it sees
+        // only the world acceleration (the impulse), not the change of frame.
+        if let Some((_, v)) = self.imu_last.as_mut() {
+            v[0] += step;
+        }
+        let dy = self.model.dynamics(&self.q, &self.dq)?;
+        self.factor(&dy.mass_matrix)?;
+        self.poses = None;
+        self.project(None).map(|_| ())
+    }
+
+    /// Fault of the IMU output from the next read on ([`ImuFault::None`] heals it).
+    pub fn set_imu_fault(&mut self, fault: ImuFault) {
+        self.imu_fault = fault;
     }
 
     /// Attach a seeded IMU on the torso (at the hip axis) with the given noise.
@@ -538,6 +608,11 @@ impl RobotSim {
         }
         for (&c, &u) in self.actuated_coordinates.iter().zip(&self.torque_nm) {
             self.generalized_force[c] += u;
+        }
+        // A push at the hip axis (the base origin): its Jacobian is the identity on (x, z).
+        if self.t_s < self.push.1 {
+            self.generalized_force[0] += self.push.0[0];
+            self.generalized_force[1] += self.push.0[1];
         }
         self.solver
             .gather(&self.generalized_force, &mut self.reduced_a);
@@ -860,9 +935,9 @@ impl RobotSim {
         Ok(())
     }
 
-    /// World displacement of the belt frame: `−v_belt · t` \[m\].
+    /// World displacement of the belt frame: `−v_belt · t` (piecewise, over belt steps) \[m\].
     fn belt_offset_m(&self) -> f64 {
-        -self.config.belt_speed_mps * self.t_s
+        self.belt_offset0_m - self.config.belt_speed_mps * (self.t_s - self.belt_since_t_s)
     }
 
     /// Joint torques that hold the present pose still on the present stance feet (gravity
@@ -1091,7 +1166,12 @@ impl Imu for RobotSim {
         }
         self.imu_last = Some((self.t_s, v));
         let imu = self.imu.as_mut().ok_or(ImuError::NotAttached)?;
-        imu.measure(&truth, out);
+        let mut fresh = ImuSample::default();
+        imu.measure(&truth, &mut fresh);
+        self.imu_fault.apply(&fresh, &self.imu_held, out)?;
+        if self.imu_fault == ImuFault::None {
+            self.imu_held = fresh;
+        }
         Ok(())
     }
 }
