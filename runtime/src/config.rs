@@ -185,6 +185,10 @@ fn default_max_implausible_imu_samples() -> u32 {
     5
 }
 
+fn default_max_step_duration_factor() -> f64 {
+    3.0
+}
+
 fn default_impact_min_phase() -> f64 {
     0.8
 }
@@ -233,6 +237,10 @@ pub struct SafetyConfig {
     /// sample or two).
     #[serde(default = "default_max_implausible_imu_samples")]
     pub max_implausible_imu_samples: u32,
+    /// A step (Walk, Stop) lasting longer than this many times the gait's step duration is a
+    /// stalled walk (the robot stopped progressing, e.g. after a push) and trips.
+    #[serde(default = "default_max_step_duration_factor")]
+    pub max_step_duration_factor: f64,
 }
 
 /// MCAP logging and zero-copy telemetry.
@@ -562,6 +570,13 @@ impl RuntimeConfig {
         positive("safety.max_temperature_c", s.max_temperature_c)?;
         positive("safety.max_imu_age_s", s.max_imu_age_s)?;
         positive("safety.max_gyro_rad_s", s.max_gyro_rad_s)?;
+        if !(s.max_step_duration_factor.is_finite() && s.max_step_duration_factor > 1.0) {
+            return Err(bad(
+                "safety.max_step_duration_factor",
+                s.max_step_duration_factor.to_string(),
+                "must be finite and > 1 (a multiple of the gait's step duration)",
+            ));
+        }
         if s.torque_saturation_ticks == 0 {
             return Err(bad(
                 "safety.torque_saturation_ticks",

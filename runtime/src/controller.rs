@@ -527,6 +527,8 @@ pub struct Controller {
     stance: Side,
     steps: u32,
     step_start_t_s: f64,
+    /// A step lasting longer than this trips [`Trip::StepTimeout`], s.
+    step_timeout_s: f64,
     touchdown_ticks: u32,
     /// (time, swing-foot height) at the previous walking tick.
     last_foot: Option<(f64, f64)>,
@@ -624,6 +626,7 @@ impl Controller {
             stance: gait.stance_leg,
             steps: 0,
             step_start_t_s: 0.0,
+            step_timeout_s: config.safety.max_step_duration_factor * gait.step_duration_s,
             touchdown_ticks: 0,
             last_foot: None,
             phase_hat: None,
@@ -815,6 +818,20 @@ impl Controller {
                 status.new_trip = true;
             }
             self.enter(ControlState::Damping, status);
+        }
+        // A stalled walk: the step has lasted several times the gait's.
+        if matches!(self.state, ControlState::Walk | ControlState::Stop) {
+            let elapsed_s = t - self.step_start_t_s;
+            if elapsed_s > self.step_timeout_s {
+                if self.trip.is_none() {
+                    self.trip = Some(Trip::StepTimeout {
+                        elapsed_s,
+                        limit_s: self.step_timeout_s,
+                    });
+                    status.new_trip = true;
+                }
+                self.enter(ControlState::Damping, status);
+            }
         }
         if self.state == ControlState::Ramp && t - self.ramp.start_t_s >= self.ramp.duration_s {
             self.enter(ControlState::Stand, status);
@@ -1212,7 +1229,7 @@ mod tests {
             self.input.t_s += self.dt_s;
             self.input.imu = self.imu_on.then_some(ImuSample {
                 t_s: self.input.t_s,
-                gyro_pitch_rad_s: 0.0,
+                gyro_pitch_rad_s: crate::io::test_dither_rad_s(self.input.t_s),
                 accel_x_mps2: -GRAVITY_MPS2 * self.pitch_rad.sin(),
                 accel_z_mps2: GRAVITY_MPS2 * self.pitch_rad.cos(),
             });

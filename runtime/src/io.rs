@@ -38,7 +38,8 @@ pub trait Imu {
     }
 }
 
-/// An IMU at rest at a fixed pitch (for tests and bench runs without robot dynamics).
+/// An IMU at rest at a fixed pitch (for tests and bench runs without robot dynamics), its gyro
+/// dithered by [`test_dither_rad_s`] so that it does not look frozen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StaticImu {
     /// Pitch, rad.
@@ -47,12 +48,22 @@ pub struct StaticImu {
     pub gyro_bias_rad_s: f64,
 }
 
+/// A gyro dither of ±1 µrad/s alternating every millisecond: a real IMU's noise never repeats
+/// a sample bit for bit, and the safety monitor treats a repeating IMU as frozen (stale).
+pub fn test_dither_rad_s(t_s: f64) -> f64 {
+    if (t_s * 1e3).round() as i64 % 2 == 0 {
+        1e-6
+    } else {
+        -1e-6
+    }
+}
+
 impl Imu for StaticImu {
     fn read_imu(&mut self, t_s: f64) -> Option<ImuSample> {
         let g = crate::estimator::GRAVITY_MPS2;
         Some(ImuSample {
             t_s,
-            gyro_pitch_rad_s: self.gyro_bias_rad_s,
+            gyro_pitch_rad_s: self.gyro_bias_rad_s + test_dither_rad_s(t_s),
             accel_x_mps2: -g * self.pitch_rad.sin(),
             accel_z_mps2: g * self.pitch_rad.cos(),
         })

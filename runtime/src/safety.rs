@@ -65,7 +65,8 @@ pub enum Trip {
         /// Consecutive missing replies.
         consecutive: u32,
     },
-    /// No fresh IMU sample for too long.
+    /// No fresh IMU data for too long: no sample, or only samples repeating the last values bit
+    /// for bit (a frozen sensor; a live IMU's noise never repeats all three channels).
     ImuStale {
         /// Age of the newest sample, s (infinite if none ever arrived).
         age_s: f64,
@@ -86,6 +87,13 @@ pub enum Trip {
         /// Limit.
         limit: u32,
     },
+    /// A step lasted far longer than the gait's (the walk stalled).
+    StepTimeout {
+        /// Time since the step began, s.
+        elapsed_s: f64,
+        /// Limit, s.
+        limit_s: f64,
+    },
 }
 
 impl Trip {
@@ -102,6 +110,7 @@ impl Trip {
             Trip::ImuStale { .. } => 8,
             Trip::ImuImplausible { .. } => 9,
             Trip::OverrunStreak { .. } => 10,
+            Trip::StepTimeout { .. } => 11,
         }
     }
 
@@ -118,6 +127,7 @@ impl Trip {
             Trip::ImuStale { .. } => "imu_stale",
             Trip::ImuImplausible { .. } => "imu_implausible",
             Trip::OverrunStreak { .. } => "overrun_streak",
+            Trip::StepTimeout { .. } => "step_timeout",
         }
     }
 }
@@ -148,6 +158,8 @@ pub struct SafetyMonitor {
     saturated_ticks: [u32; SLOTS],
     missing: [u32; SLOTS],
     last_imu_t_s: f64,
+    /// Bits of the last plausible sample's (gyro, accel x, accel z).
+    last_imu_bits: Option<[u64; 3]>,
     implausible_imu: u32,
 }
 
@@ -161,6 +173,7 @@ impl SafetyMonitor {
             saturated_ticks: [0; SLOTS],
             missing: [0; SLOTS],
             last_imu_t_s: f64::NEG_INFINITY,
+            last_imu_bits: None,
             implausible_imu: 0,
         }
     }
@@ -217,7 +230,16 @@ impl SafetyMonitor {
             let norm = imu.accel_x_mps2.hypot(imu.accel_z_mps2);
             let plausible = self.imu_plausible(imu);
             if plausible {
-                self.last_imu_t_s = self.last_imu_t_s.max(imu.t_s);
+                // A sample repeating the last one bit for bit is not fresh data.
+                let bits = [
+                    imu.gyro_pitch_rad_s.to_bits(),
+                    imu.accel_x_mps2.to_bits(),
+                    imu.accel_z_mps2.to_bits(),
+                ];
+                if self.last_imu_bits != Some(bits) {
+                    self.last_imu_t_s = self.last_imu_t_s.max(imu.t_s);
+                    self.last_imu_bits = Some(bits);
+                }
                 self.implausible_imu = 0;
             } else {
                 self.implausible_imu = self.implausible_imu.saturating_add(1);
@@ -312,5 +334,78 @@ impl SafetyMonitor {
         } else {
             None
         }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::controller::SlotLayout;
+
+    /// Feeds `n` ticks at 1 kHz with healthy motors and the IMU sample `imu(k)`; the first trip.
+    fn run(n: u32, imu: impl Fn(u32) -> ImuSample) -> Option<(u32, Trip)> {
+        let setup = crate::Setup::shipped().unwrap();
+        let layout = SlotLayout::new(&setup.config, false);
+        let mut monitor = SafetyMonitor::new(setup.config.safety.clone(), 20, layout);
+        let mut motors = [MotorSample::default(); SLOTS];
+        for m in motors.iter_mut() {
+            m.fresh = true;
+            m.temperature_c = 30.0;
+        }
+        let leg_q_rad = [0.0, 0.3, 0.0, 0.3];
+        for k in 0..n {
+            let sample = imu(k);
+            let input = SafetyInput {
+                t_s: f64::from(k) * 1e-3,
+                motors: &motors,
+                leg_q_rad: &leg_q_rad,
+                imu: Some(&sample),
+                pitch_rad: 0.0,
+                overrun_streak: 0,
+            };
+            if let Some(trip) = monitor.check(&input, true) {
+                return Some((k, trip));
+            }
+        }
+        None
+    }
+
+    fn sample(k: u32, gyro_rad_s: f64) -> ImuSample {
+        ImuSample {
+            t_s: f64::from(k) * 1e-3,
+            gyro_pitch_rad_s: gyro_rad_s,
+            accel_x_mps2: 0.0,
+            accel_z_mps2: 9.81,
+        }
+    }
+
+    #[test]
+    fn a_frozen_imu_is_stale_after_the_age_limit_and_a_live_one_never() {
+        // Live: values change every sample (the smallest change counts).
+        assert_eq!(
+            run(2000, |k| sample(
+                k,
+                crate::io::test_dither_rad_s(f64::from(k) * 1e-3)
+            )),
+            None
+        );
+        let live = |k: u32| crate::io::test_dither_rad_s(f64::from(k) * 1e-3);
+        // Frozen from tick 100 on (value and time stamp): the last fresh sample is at 100 ms;
+        // stale once older than the 20 ms limit, at 121 ms.
+        let (k, trip) = run(2000, |k| {
+            if k < 100 {
+                sample(k, live(k))
+            } else {
+                sample(100, 0.01)
+            }
+        })
+        .unwrap();
+        assert!(matches!(trip, Trip::ImuStale { .. }), "{trip:?}");
+        assert_eq!(k, 121, "{trip:?}");
+        // Only the values count: fresh time stamps do not make repeated values fresh.
+        let (k, trip) = run(2000, |k| sample(k, if k < 100 { live(k) } else { 0.01 })).unwrap();
+        assert!(matches!(trip, Trip::ImuStale { .. }), "{trip:?}");
+        assert_eq!(k, 121);
     }
 }
