@@ -20,6 +20,29 @@ fn register_font() -> Result<()> {
     result
 }
 
+/// Draws `$draw(&root, args…)` into `<prefix>.png` and `<prefix>.svg` of `$size` pixels (the
+/// same drawing code on both backends) and returns `Ok(())`.
+macro_rules! png_and_svg {
+    ($prefix:expr, $size:expr, $draw:ident($($arg:expr),*)) => {{
+        register_font()?;
+        let png = $prefix.with_extension("png");
+        let svg = $prefix.with_extension("svg");
+        {
+            let root = BitMapBackend::new(&png, $size).into_drawing_area();
+            $draw(&root, $($arg),*)?;
+            root.present()
+                .map_err(|e| anyhow!("{}: {e}", png.display()))?;
+        }
+        {
+            let root = SVGBackend::new(&svg, $size).into_drawing_area();
+            $draw(&root, $($arg),*)?;
+            root.present()
+                .map_err(|e| anyhow!("{}: {e}", svg.display()))?;
+        }
+        Ok(())
+    }};
+}
+
 /// One arrow of the convergence figure: initial → converged (thigh, shin), m, and whether the
 /// run ended in a worse local minimum.
 pub struct ConvergenceArrow {
@@ -39,22 +62,11 @@ pub fn convergence(
     bounds_m: [[f64; 2]; 2],
     paper_m: (f64, f64),
 ) -> Result<()> {
-    register_font()?;
-    let png = prefix.with_extension("png");
-    let svg = prefix.with_extension("svg");
-    {
-        let root = BitMapBackend::new(&png, (900, 800)).into_drawing_area();
-        draw_convergence(&root, arrows, bounds_m, paper_m)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", png.display()))?;
-    }
-    {
-        let root = SVGBackend::new(&svg, (900, 800)).into_drawing_area();
-        draw_convergence(&root, arrows, bounds_m, paper_m)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", svg.display()))?;
-    }
-    Ok(())
+    png_and_svg!(
+        prefix,
+        (900, 800),
+        draw_convergence(arrows, bounds_m, paper_m)
+    )
 }
 
 fn draw_convergence<DB: DrawingBackend>(
@@ -144,22 +156,7 @@ pub struct PortraitRun<'a> {
 /// The paper's Fig. 4: phase portraits (q vs q̇) of the left and right hip and knee, one panel
 /// per joint, every run overlaid, as `<prefix>.png` and `<prefix>.svg`.
 pub fn portraits(prefix: &Path, runs: &[PortraitRun<'_>]) -> Result<()> {
-    register_font()?;
-    let png = prefix.with_extension("png");
-    let svg = prefix.with_extension("svg");
-    {
-        let root = BitMapBackend::new(&png, (1200, 900)).into_drawing_area();
-        draw_portraits(&root, runs)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", png.display()))?;
-    }
-    {
-        let root = SVGBackend::new(&svg, (1200, 900)).into_drawing_area();
-        draw_portraits(&root, runs)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", svg.display()))?;
-    }
-    Ok(())
+    png_and_svg!(prefix, (1200, 900), draw_portraits(runs))
 }
 
 fn draw_portraits<DB: DrawingBackend>(
@@ -243,23 +240,7 @@ where
 /// The paper's Fig. 5: stick figures of one step at evenly spaced phases, side by side, as
 /// `<prefix>.png` and `<prefix>.svg`; `source` names the log in the caption.
 pub fn tiles(prefix: &Path, tiles: &runtime::tiles::GaitTiles, source: &str) -> Result<()> {
-    register_font()?;
-    let png = prefix.with_extension("png");
-    let svg = prefix.with_extension("svg");
-    let size = tiles_size(tiles);
-    {
-        let root = BitMapBackend::new(&png, size).into_drawing_area();
-        draw_tiles(&root, tiles, source)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", png.display()))?;
-    }
-    {
-        let root = SVGBackend::new(&svg, size).into_drawing_area();
-        draw_tiles(&root, tiles, source)?;
-        root.present()
-            .map_err(|e| anyhow!("{}: {e}", svg.display()))?;
-    }
-    Ok(())
+    png_and_svg!(prefix, tiles_size(tiles), draw_tiles(tiles, source))
 }
 
 /// Horizontal distance between tiles, and the x and z ranges of the figure, m.

@@ -210,6 +210,22 @@ impl TopLevel {
             .map_err(|e| log_err(path, format!("attachment {name} is not UTF-8: {e}")))
     }
 
+    /// The setup a log was recorded with: its attached runtime config, gait file and URDF,
+    /// cross-checked like [`crate::Setup::load`]; errors name the log and the attachment.
+    pub(crate) fn setup(&self, path: &Path) -> Result<crate::Setup> {
+        let origin = |name: &str| format!("{name} in {}", path.display());
+        let config = crate::config::RuntimeConfig::from_toml(
+            self.attachment_text(path, "runtime.toml")?,
+            &origin("runtime.toml"),
+        )?;
+        let gait = model::gait::GaitFile::from_json(
+            self.attachment_text(path, "gait.json")?,
+            &origin("gait.json"),
+        )?;
+        let urdf = self.attachment_text(path, "robot.urdf")?.to_string();
+        crate::Setup::from_parts(config, gait, urdf, &origin("robot.urdf"))
+    }
+
     /// Metadata record `name`, key `key`.
     pub(crate) fn metadata_value(&self, name: &str, key: &str) -> Option<&str> {
         self.metadata

@@ -24,7 +24,6 @@
 //! assert!(report.divergence.is_none(), "{report}");
 //! ```
 
-use crate::config::RuntimeConfig;
 use crate::controller::{
     CommandMode, ControlState, Controller, JointCommand, MotorSample, OperatorCommand, TickInput,
     TickOutput, SLOTS,
@@ -304,23 +303,13 @@ fn metadata_bool(path: &Path, value: Option<&str>, key: &str) -> Result<bool> {
 pub fn controller_of_log(path: &Path) -> Result<(Setup, Controller, TickOutput)> {
     let bytes = read_bytes(path)?;
     let top = top_level(path, &bytes)?;
-    let origin = |name: &str| format!("{name} in {}", path.display());
-    let config = RuntimeConfig::from_toml(
-        top.attachment_text(path, "runtime.toml")?,
-        &origin("runtime.toml"),
-    )?;
-    let gait = model::gait::GaitFile::from_json(
-        top.attachment_text(path, "gait.json")?,
-        &origin("gait.json"),
-    )?;
-    let urdf = top.attachment_text(path, "robot.urdf")?.to_string();
+    let setup = top.setup(path)?;
     let with_held = metadata_bool(path, top.metadata_value("run", "with_held"), "with_held")?;
     let start_walking = metadata_bool(
         path,
         top.metadata_value("run", "start_walking"),
         "start_walking",
     )?;
-    let setup = Setup::from_parts(config, gait, urdf, &origin("robot.urdf"))?;
     let mut controller = setup.controller(with_held)?;
     let mut out = TickOutput::default();
     if start_walking {
@@ -449,56 +438,6 @@ pub const FIXTURES: [(&str, &str); 3] = [
     ),
 ];
 
-/// Four free joints (inertia and damping, no robot dynamics) behind the simulated A1
-/// firmware, with a static IMU: the state machine's fixture backend.
-fn joint_bench_backend(
-    setup: &Setup,
-) -> Result<
-    crate::io::WithImu<
-        drivers::sim_bus::SimBus<drivers::sim_bus::InertiaDampingPlant>,
-        crate::io::StaticImu,
-    >,
-> {
-    use drivers::sim_bus::{A1Model, InertiaDampingPlant, RigidJoint, SimBus, SimConfig, SimMotor};
-    let joint = RigidJoint {
-        inertia_kg_m2: 0.05,
-        damping_nm_s_per_rad: 0.1,
-        load_torque_nm: 0.0,
-    };
-    let invalid = |reason: String| crate::RuntimeError::Gait { reason };
-    let mut plant = InertiaDampingPlant::new(vec![joint; setup.config.leg_motors.len()])
-        .ok_or_else(|| invalid("joint bench: invalid plant".into()))?;
-    // A little off the gait's first pose, as a robot hung in its stand would be.
-    let first = setup.controller(false)?.first_pose();
-    for (j, q) in first.iter().take(setup.config.leg_motors.len()).enumerate() {
-        plant.set_state(j, q + 0.1 * (-1f64).powi(j as i32), 0.0);
-    }
-    let mut motors = Vec::new();
-    for (joint, m) in setup.config.leg_motors.iter().enumerate() {
-        let id = drivers::a1::MotorId::new(m.id)
-            .ok_or_else(|| invalid(format!("motor id {} out of range", m.id)))?;
-        motors.push(SimMotor {
-            spec: drivers::bus::MotorSpec { bus: m.bus, id },
-            joint,
-        });
-    }
-    let config = SimConfig {
-        control_rate_hz: setup.config.loop_.rate_hz,
-        bitrate_bps: setup.config.loop_.bitrate_bps,
-        bus_count: setup.config.loop_.bus_count,
-        motors,
-        model: A1Model::default(),
-        seed: 7,
-    };
-    Ok(crate::io::WithImu {
-        bus: SimBus::new(config, plant).map_err(|e| invalid(format!("joint bench bus: {e}")))?,
-        imu: crate::io::StaticImu {
-            pitch_rad: 0.02,
-            gyro_bias_rad_s: 0.002,
-        },
-    })
-}
-
 /// Record the [`FIXTURES`] into `dir` with `setup` (the shipped config and default gait);
 /// returns the files written. To keep them small, the per-tick sample channels are logged at
 /// 50 Hz (`/input` and `/command` are logged every tick regardless) and the state machine's
@@ -531,9 +470,18 @@ pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
         (1.5, OperatorCommand::Reset),
     ];
     options.log_path = Some(paths[1].clone());
+    // A little off the gait's first pose, as a robot hung in its stand would be.
+    let first = setup.controller(false)?.first_pose();
+    let start: Vec<f64> = (0..setup.config.leg_motors.len())
+        .map(|j| first[j] + 0.1 * (-1f64).powi(j as i32))
+        .collect();
+    let imu = crate::io::StaticImu {
+        pitch_rad: 0.02,
+        gyro_bias_rad_s: 0.002,
+    };
     crate::run(
         &quick_ramp,
-        joint_bench_backend(setup)?,
+        crate::sim_run::joint_bench_backend(setup, &start, imu)?,
         SimulatedClock::default(),
         options,
         None,

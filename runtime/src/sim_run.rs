@@ -829,3 +829,48 @@ impl std::fmt::Display for SimWalkReport {
         Ok(())
     }
 }
+
+/// The leg motors of `setup` on four free joints (inertia 0.05 kg·m², damping 0.1 N·m·s/rad, no
+/// robot dynamics) starting at `start_rad`, behind the simulated A1 firmware (seed 7), paired
+/// with a static IMU: a backend for the state machine and loop tests without a robot.
+pub fn joint_bench_backend(
+    setup: &Setup,
+    start_rad: &[f64],
+    imu: crate::io::StaticImu,
+) -> Result<crate::io::WithImu<SimBus<drivers::sim_bus::InertiaDampingPlant>, crate::io::StaticImu>>
+{
+    use drivers::sim_bus::{InertiaDampingPlant, RigidJoint};
+    let joint = RigidJoint {
+        inertia_kg_m2: 0.05,
+        damping_nm_s_per_rad: 0.1,
+        load_torque_nm: 0.0,
+    };
+    let invalid = |reason: String| RuntimeError::Gait { reason };
+    let n = setup.config.leg_motors.len();
+    let mut plant = InertiaDampingPlant::new(vec![joint; n])
+        .ok_or_else(|| invalid("joint bench: invalid plant".into()))?;
+    for (j, q) in start_rad.iter().take(n).enumerate() {
+        plant.set_state(j, *q, 0.0);
+    }
+    let mut motors = Vec::with_capacity(n);
+    for (joint, m) in setup.config.leg_motors.iter().enumerate() {
+        let id = drivers::a1::MotorId::new(m.id)
+            .ok_or_else(|| invalid(format!("motor id {} out of range", m.id)))?;
+        motors.push(SimMotor {
+            spec: drivers::bus::MotorSpec { bus: m.bus, id },
+            joint,
+        });
+    }
+    let config = SimConfig {
+        control_rate_hz: setup.config.loop_.rate_hz,
+        bitrate_bps: setup.config.loop_.bitrate_bps,
+        bus_count: setup.config.loop_.bus_count,
+        motors,
+        model: A1Model::default(),
+        seed: 7,
+    };
+    Ok(crate::io::WithImu {
+        bus: SimBus::new(config, plant).map_err(|e| invalid(format!("joint bench bus: {e}")))?,
+        imu,
+    })
+}

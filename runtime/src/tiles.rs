@@ -13,11 +13,10 @@
 //! put during a step. The step drawn is the middle one of the complete steps in the log (a
 //! step whose start and end are both in the log).
 
-use crate::config::RuntimeConfig;
 use crate::controller::ControlState;
 use crate::log::CHANNELS;
 use crate::log_read::{check_schema_version, log_err, read_bytes, top_level};
-use crate::{Result, Setup};
+use crate::Result;
 use model::Side;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -92,18 +91,7 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
         ));
     }
     let bytes = read_bytes(path)?;
-    let top = top_level(path, &bytes)?;
-    let origin = |name: &str| format!("{name} in {}", path.display());
-    let config = RuntimeConfig::from_toml(
-        top.attachment_text(path, "runtime.toml")?,
-        &origin("runtime.toml"),
-    )?;
-    let gait = model::gait::GaitFile::from_json(
-        top.attachment_text(path, "gait.json")?,
-        &origin("gait.json"),
-    )?;
-    let urdf = top.attachment_text(path, "robot.urdf")?.to_string();
-    let setup = Setup::from_parts(config, gait, urdf, &origin("robot.urdf"))?;
+    let setup = top_level(path, &bytes)?.setup(path)?;
     let names: Vec<&str> = setup
         .config
         .leg_motors

@@ -3,53 +3,19 @@
 //! MCAP log holds every tick, and the bus ends deactivated (damping).
 
 use drivers::a1::MotorId;
-use drivers::bus::{Lifecycle, MotorBus, MotorSpec};
-use drivers::sim_bus::{
-    A1Model, InertiaDampingPlant, JointPlant, RigidJoint, SimBus, SimConfig, SimMotor,
-};
+use drivers::bus::{Lifecycle, MotorBus};
+use drivers::sim_bus::{InertiaDampingPlant, JointPlant, SimBus};
 use runtime::controller::{ControlState, OperatorCommand};
 use runtime::io::{StaticImu, WithImu};
 use runtime::rt_loop::{self, LoopOptions, SimulatedClock};
 use runtime::Setup;
 
 fn backend(setup: &Setup, start_rad: [f64; 4]) -> WithImu<SimBus<InertiaDampingPlant>, StaticImu> {
-    let joint = RigidJoint {
-        inertia_kg_m2: 0.05,
-        damping_nm_s_per_rad: 0.1,
-        load_torque_nm: 0.0,
+    let imu = StaticImu {
+        pitch_rad: 0.0,
+        gyro_bias_rad_s: 0.002,
     };
-    let mut plant = InertiaDampingPlant::new(vec![joint; 4]).expect("valid plant");
-    for (j, q) in start_rad.iter().enumerate() {
-        plant.set_state(j, *q, 0.0);
-    }
-    let motors = setup
-        .config
-        .leg_motors
-        .iter()
-        .enumerate()
-        .map(|(joint, m)| SimMotor {
-            spec: MotorSpec {
-                bus: m.bus,
-                id: MotorId::new(m.id).expect("id"),
-            },
-            joint,
-        })
-        .collect();
-    let config = SimConfig {
-        control_rate_hz: setup.config.loop_.rate_hz,
-        bitrate_bps: setup.config.loop_.bitrate_bps,
-        bus_count: setup.config.loop_.bus_count,
-        motors,
-        model: A1Model::default(),
-        seed: 7,
-    };
-    WithImu {
-        bus: SimBus::new(config, plant).expect("sim bus"),
-        imu: StaticImu {
-            pitch_rad: 0.0,
-            gyro_bias_rad_s: 0.002,
-        },
-    }
+    runtime::sim_run::joint_bench_backend(setup, &start_rad, imu).expect("joint bench")
 }
 
 #[test]
