@@ -60,6 +60,10 @@ enum Command {
         /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
         #[arg(long, value_delimiter = ',')]
         can_interfaces: Option<Vec<String>>,
+        /// Inject faults (sim): a profile name (none, loss-0.1, loss-1, loss-10, corrupt-1,
+        /// delay-1, soak, rough) or a TOML file; seeded by --seed.
+        #[arg(long)]
+        faults: Option<String>,
     },
     /// Walk the simulated robot for a long time under random faults; after each trip reset and
     /// walk on. Prints ticks, overruns, trips by reason, log drops, worst tick, distance.
@@ -962,8 +966,12 @@ fn run(cli: Cli) -> Result<()> {
             real_time,
             keyboard,
             can_interfaces,
+            faults,
         } => {
             let setup = runtime::Setup::load(&config, &gait)?;
+            if faults.is_some() && matches!(backend, Backend::Can) {
+                bail!("--faults injects faults into the simulated backend only");
+            }
             match backend {
                 Backend::Sim => {
                     let mut options = runtime::sim_run::SimWalkOptions::new(duration);
@@ -971,6 +979,10 @@ fn run(cli: Cli) -> Result<()> {
                     options.log_path = log;
                     options.seed = seed;
                     options.real_time = real_time;
+                    options.faults = faults
+                        .as_deref()
+                        .map(runtime::faults::FaultProfile::resolve)
+                        .transpose()?;
                     if real_time {
                         sim_walk_operated(&setup, &options, keyboard)
                     } else {

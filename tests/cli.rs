@@ -361,3 +361,41 @@ fn soak_refuses_an_unknown_fault_profile_by_name() {
         "{err}"
     );
 }
+
+#[test]
+fn sim_run_injects_a_fault_profile_and_names_a_bad_one() {
+    let (ok, out, err) = adam(&[
+        "run",
+        "--backend",
+        "sim",
+        "--duration",
+        "2s",
+        "--faults",
+        "loss-1",
+        "--seed",
+        "2",
+    ]);
+    assert!(ok, "{out}\n{err}");
+    // 1 % of about 2 × 4 × 2000 frames: lost frames are counted and each is a missing reply.
+    let lost: u64 = out
+        .split("CAN frames lost ")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|n| n.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no lost-frame count: {out}"));
+    assert!((50..=300).contains(&lost), "{lost}: {out}");
+    assert!(out.contains("safety trips: none"), "{out}");
+    let (ok, _, err) = adam(&[
+        "run",
+        "--backend",
+        "sim",
+        "--duration",
+        "1s",
+        "--faults",
+        "nope",
+    ]);
+    assert!(
+        !ok && err.contains("faults") && err.contains("nope"),
+        "{err}"
+    );
+}
