@@ -110,8 +110,34 @@ pub fn codesign_from(
         };
         let mut x0 = x.clone();
         x0.extend(lengths);
-        let problem = HzdProblem::with_codesign(biped, config.clone(), x0, true, Some(spec))?;
-        let (xs, report) = plan::solve_stage(&problem, "co-design", config, on_progress)?;
+        let problem =
+            HzdProblem::with_codesign(biped.clone(), config.clone(), x0, true, Some(spec.clone()))?;
+        let attempt = plan::solve_stage_attempt(&problem, "co-design", config, on_progress)?;
+        // A solve that ran out of iterations is restarted once from its last iterate (the
+        // barrier parameter starts afresh; the initial design of the run is unchanged).
+        let (problem, attempt) = if attempt.hit_iteration_limit() {
+            let restarted = HzdProblem::with_codesign(
+                biped,
+                config.clone(),
+                attempt.x.clone(),
+                true,
+                Some(spec),
+            )?;
+            let mut again = plan::solve_stage_attempt(
+                &restarted,
+                "co-design (restarted)",
+                config,
+                on_progress,
+            )?;
+            // Report both solves together: iterations and times are the run's.
+            again.report.iterations += attempt.report.iterations;
+            again.report.solve_time_s += attempt.report.solve_time_s;
+            again.report.evaluation_time_s += attempt.report.evaluation_time_s;
+            (restarted, again)
+        } else {
+            (problem, attempt)
+        };
+        let (xs, report) = attempt.into_result()?;
         let l = &problem.layout;
         let found = [xs[l.design_var(0)], xs[l.design_var(1)]];
         outer.push(OuterIteration {

@@ -85,6 +85,46 @@ pub(crate) fn solve_stage(
     config: &PlannerConfig,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<(Vec<f64>, StageReport)> {
+    let attempt = solve_stage_attempt(problem, stage, config, on_progress)?;
+    attempt.into_result()
+}
+
+/// One solve of a stage, successful or not: the last iterate and its report.
+pub(crate) struct StageAttempt {
+    /// The solver's last iterate.
+    pub x: Vec<f64>,
+    /// Its report.
+    pub report: StageReport,
+    /// Whether the stage may use it.
+    pub usable: bool,
+}
+
+impl StageAttempt {
+    /// The iterate if usable, else the error naming the stage, status and violation.
+    pub fn into_result(self) -> Result<(Vec<f64>, StageReport)> {
+        if !self.usable {
+            return Err(PlannerError::NotSolved {
+                stage: self.report.stage.to_string(),
+                status: self.report.status.clone(),
+                iterations: self.report.iterations,
+                violation: self.report.violation,
+            });
+        }
+        Ok((self.x, self.report))
+    }
+
+    /// The solver stopped at its iteration limit.
+    pub fn hit_iteration_limit(&self) -> bool {
+        self.report.status == "iterationlimit"
+    }
+}
+
+pub(crate) fn solve_stage_attempt(
+    problem: &HzdProblem,
+    stage: &'static str,
+    config: &PlannerConfig,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<StageAttempt> {
     on_progress(Progress::Stage(stage));
     let options = SolveOptions {
         tolerance: config.solver.tolerance,
@@ -110,16 +150,13 @@ pub(crate) fn solve_stage(
     };
     // The feasibility stage only has to deliver a feasible start for the second: a point that
     // satisfies every constraint is kept even if the solver stopped on a numerical status.
-    let usable = sol.status.is_success() || (stage == FEASIBILITY && violation < 1e-8);
-    if !usable || violation > 1e-5 {
-        return Err(PlannerError::NotSolved {
-            stage: stage.to_string(),
-            status: report.status.clone(),
-            iterations: report.iterations,
-            violation,
-        });
-    }
-    Ok((sol.x, report))
+    let usable = (sol.status.is_success() || (stage == FEASIBILITY && violation < 1e-8))
+        && violation <= 1e-5;
+    Ok(StageAttempt {
+        x: sol.x,
+        report,
+        usable,
+    })
 }
 
 /// Plans a periodic HZD gait for `model` with its design joints at zero (the URDF's design).
