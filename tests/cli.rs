@@ -247,8 +247,9 @@ fn a_run_killed_with_sigkill_leaves_a_log_that_reads_recovers_and_replays() {
     std::fs::create_dir_all(&dir).expect("dir");
     let log = dir.join("killed.mcap");
     let log_s = log.display().to_string();
-    // A wall-clock run that would last 30 s, killed (SIGKILL: no destructor, no footer) after
-    // 2.5 s of logging.
+    // A wall-clock run that would last 30 s, killed (SIGKILL: no destructor, no footer) once
+    // its log has grown past 1.5 MB (some 3000 ticks of messages, several complete chunks;
+    // waiting on the file, not on a fixed time, keeps this independent of the machine's speed).
     let mut child = Command::new(env!("CARGO_BIN_EXE_adam"))
         .args([
             "run",
@@ -265,7 +266,14 @@ fn a_run_killed_with_sigkill_leaves_a_log_that_reads_recovers_and_replays() {
         .stderr(std::process::Stdio::null())
         .spawn()
         .expect("adam runs");
-    std::thread::sleep(std::time::Duration::from_millis(2500));
+    let waited = std::time::Instant::now();
+    while std::fs::metadata(&log).map_or(0, |m| m.len()) < 1_500_000 {
+        if waited.elapsed() > std::time::Duration::from_secs(60) {
+            child.kill().ok();
+            panic!("the log did not grow to 1.5 MB in 60 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
     child.kill().expect("SIGKILL");
     child.wait().expect("reaped");
 

@@ -407,12 +407,6 @@ impl WireFaults {
                     .then_some(("delay_s", self.delay_s))
             })
     }
-
-    fn is_clean(&self) -> bool {
-        self.loss_probability == 0.0
-            && self.corrupt_probability == 0.0
-            && self.delay_probability == 0.0
-    }
 }
 
 /// Damage a corrupted frame carries, each one a distinct codec rejection.
@@ -464,6 +458,15 @@ pub struct WireStats {
     pub delayed_late: u64,
 }
 
+impl core::ops::AddAssign for WireStats {
+    fn add_assign(&mut self, other: Self) {
+        self.lost += other.lost;
+        self.corrupted += other.corrupted;
+        self.delayed += other.delayed;
+        self.delayed_late += other.delayed_late;
+    }
+}
+
 /// A shared recorder of the simulated wire (diagnostics and conformance tests only: it
 /// locks and grows a `Vec`, so leave it off in real-time use).
 pub type WireTap = Arc<Mutex<Vec<TapEntry>>>;
@@ -511,13 +514,9 @@ impl Firmware {
         self.active = Command::damping(self.motor.spec.id, model.disable_damping_nm_s_per_rad);
     }
 
-    /// Handle one frame from the host; the reply frame, if any.
-    fn receive(&mut self, frame: &Frame, model: &A1Model) -> Option<Frame> {
-        self.receive_bytes(frame.id, &frame.data, model)
-    }
-
-    /// Handle the id and bytes of a host frame as received (possibly damaged on the wire).
-    fn receive_bytes(&mut self, id: u32, data: &[u8], model: &A1Model) -> Option<Frame> {
+    /// Handle the id and bytes of a host frame as received (possibly damaged on the wire); the
+    /// reply frame, if any.
+    fn receive(&mut self, id: u32, data: &[u8], model: &A1Model) -> Option<Frame> {
         if self.silent {
             return None;
         }
@@ -805,26 +804,6 @@ impl<P: JointPlant> SimBus<P> {
             .map(|f| f.temperature_c)
     }
 
-    /// Deliver one host frame on `bus`; the decoded reply of the motor that answered.
-    fn transmit(
-        &mut self,
-        bus: usize,
-        frame: &Frame,
-        bits: &mut [u32; MAX_BUSES],
-    ) -> Option<Reply> {
-        bits[bus] += frame_bits_exact(frame.id, &frame.data).unwrap_or(0);
-        self.record(bus, Direction::ToMotor, frame);
-        let model = self.config.model;
-        let reply_frame = self
-            .firmware
-            .iter_mut()
-            .filter(|f| f.motor.spec.bus == bus)
-            .find_map(|f| f.receive(frame, &model))?;
-        bits[bus] += frame_bits_exact(reply_frame.id, &reply_frame.data).unwrap_or(0);
-        self.record(bus, Direction::ToHost, &reply_frame);
-        a1::decode_reply(reply_frame.id, &reply_frame.data).ok()
-    }
-
     /// What the wire does to one frame: `None` delivers it intact.
     fn wire_fault(&mut self) -> Option<WireFault> {
         let f = self.wire_faults;
@@ -844,21 +823,23 @@ impl<P: JointPlant> SimBus<P> {
         None
     }
 
-    /// [`Self::transmit`] through the faulty wire: a command or reply may be lost, corrupted
-    /// (then rejected by the firmware's or the host's decoder) or, for a reply, delayed past
-    /// `budget` (then missing).
-    fn transmit_faulty(
+    /// Deliver one host frame on `bus`; the decoded reply of the motor that answered. With
+    /// `budget` (control traffic) the frame goes through the wire's faults: a command or reply
+    /// may be lost, corrupted (then rejected by the firmware's or the host's decoder) or, for a
+    /// reply, delayed past `budget` (then missing); without (lifecycle frames) the wire is clean.
+    fn transmit(
         &mut self,
         bus: usize,
         frame: &Frame,
         bits: &mut [u32; MAX_BUSES],
-        budget: Duration,
+        budget: Option<Duration>,
     ) -> Option<Reply> {
         let model = self.config.model;
         // Host → motor. A lost frame still took its bus time (the receiver missed it).
         bits[bus] += frame_bits_exact(frame.id, &frame.data).unwrap_or(0);
         self.record(bus, Direction::ToMotor, frame);
-        let (id, data, len) = match self.wire_fault() {
+        let fault = budget.and_then(|_| self.wire_fault());
+        let (id, data, len) = match fault {
             Some(WireFault::Lost) => return None,
             Some(WireFault::Corrupted(damage)) => corrupt(frame, damage),
             None => (frame.id, frame.data, frame.data.len()),
@@ -867,10 +848,13 @@ impl<P: JointPlant> SimBus<P> {
             .firmware
             .iter_mut()
             .filter(|f| f.motor.spec.bus == bus)
-            .find_map(|f| f.receive_bytes(id, &data[..len], &model))?;
+            .find_map(|f| f.receive(id, &data[..len], &model))?;
         // Motor → host.
         bits[bus] += frame_bits_exact(reply_frame.id, &reply_frame.data).unwrap_or(0);
         self.record(bus, Direction::ToHost, &reply_frame);
+        let Some(budget) = budget else {
+            return a1::decode_reply(reply_frame.id, &reply_frame.data).ok();
+        };
         let (id, data, len) = match self.wire_fault() {
             Some(WireFault::Lost) => return None,
             Some(WireFault::Corrupted(damage)) => corrupt(&reply_frame, damage),
@@ -908,7 +892,7 @@ impl<P: JointPlant> SimBus<P> {
         let table = self.table;
         for spec in table.iter() {
             let frame = a1::encode_special(spec.id, special);
-            match self.transmit(spec.bus, &frame, &mut bits) {
+            match self.transmit(spec.bus, &frame, &mut bits, None) {
                 Some(reply) if special == Special::Enable && !reply.enabled => {
                     first_error.get_or_insert(BusError::EnableRefused {
                         motor: spec.id,
@@ -996,14 +980,8 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
         let (frames, buses, saturation) = self.table.prepare(commands, replies)?;
         let mut bits = [0u32; MAX_BUSES];
         let mut missing = None;
-        let clean = self.wire_faults.is_clean();
         for i in 0..commands.len() {
-            let reply = if clean {
-                self.transmit(buses[i], &frames[i], &mut bits)
-            } else {
-                self.transmit_faulty(buses[i], &frames[i], &mut bits, budget)
-            };
-            match reply {
+            match self.transmit(buses[i], &frames[i], &mut bits, Some(budget)) {
                 Some(reply) => replies[i] = reply,
                 None => {
                     missing.get_or_insert(BusError::MissingReply {
@@ -1057,6 +1035,13 @@ mod tests {
     use super::*;
     use crate::a1::MotorId;
     use crate::timing::{frame_bits, Stuffing};
+
+    impl Firmware {
+        /// [`Firmware::receive`] of an intact frame.
+        fn receive_frame(&mut self, frame: &Frame, model: &A1Model) -> Option<Frame> {
+            self.receive(frame.id, &frame.data, model)
+        }
+    }
 
     const PERIOD: Duration = Duration::from_millis(1);
 
@@ -1492,7 +1477,7 @@ mod tests {
             let f = f.unwrap();
             a1::decode_reply(f.id, &f.data).unwrap()
         };
-        let r = reply(fw.receive(&a1::encode_special(id(7), Special::SetZero), &model));
+        let r = reply(fw.receive_frame(&a1::encode_special(id(7), Special::SetZero), &model));
         assert!(
             r.q_rad.abs() <= a1::codec::REPLY_Q.quantum() / 2.0,
             "{}",
@@ -1501,22 +1486,25 @@ mod tests {
         assert!(!r.enabled);
         // Disabled: commands are acknowledged but ignored.
         let cmd = a1::encode_command(&Command::pd(id(7), 1.0, 0.0, 10.0, 0.0, 0.0)).unwrap();
-        assert_eq!(reply(fw.receive(&cmd.frame, &model)).mode, Mode::Damping);
+        assert_eq!(
+            reply(fw.receive_frame(&cmd.frame, &model)).mode,
+            Mode::Damping
+        );
         assert!(fw.inbox.is_none());
-        let r = reply(fw.receive(&a1::encode_special(id(7), Special::Enable), &model));
+        let r = reply(fw.receive_frame(&a1::encode_special(id(7), Special::Enable), &model));
         assert!(r.enabled);
-        fw.receive(&cmd.frame, &model);
+        fw.receive_frame(&cmd.frame, &model);
         assert!(fw.inbox.is_some());
         // Another motor's frame, a bad opcode, a reserved mode: no reply.
         assert!(fw
-            .receive(&a1::encode_special(id(8), Special::Disable), &model)
+            .receive_frame(&a1::encode_special(id(8), Special::Disable), &model)
             .is_none());
         let mut bad = a1::encode_special(id(7), Special::Disable);
         bad.data[0] = 0x55;
-        assert!(fw.receive(&bad, &model).is_none());
+        assert!(fw.receive_frame(&bad, &model).is_none());
         let mut bad = cmd.frame;
         bad.data[7] |= 0xC0;
-        assert!(fw.receive(&bad, &model).is_none());
+        assert!(fw.receive_frame(&bad, &model).is_none());
     }
 
     #[test]

@@ -97,6 +97,8 @@ pub(crate) struct StageAttempt {
     pub report: StageReport,
     /// Whether the stage may use it.
     pub usable: bool,
+    /// Why the solver stopped.
+    pub status: nlp::SolveStatus,
 }
 
 impl StageAttempt {
@@ -115,7 +117,7 @@ impl StageAttempt {
 
     /// The solver stopped at its iteration limit.
     pub fn hit_iteration_limit(&self) -> bool {
-        self.report.status == "iterationlimit"
+        self.status == nlp::SolveStatus::IterationLimit
     }
 }
 
@@ -156,6 +158,7 @@ pub(crate) fn solve_stage_attempt(
         x: sol.x,
         report,
         usable,
+        status: sol.status,
     })
 }
 

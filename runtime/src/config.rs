@@ -59,6 +59,20 @@ pub struct MotorConfig {
     pub offset_rad: f64,
 }
 
+impl MotorConfig {
+    /// The motor's id and bus as the buses address it; `field` names this motor in the error
+    /// (e.g. `leg_motors[2]`) if its id is out of range.
+    pub fn spec(&self, field: &str) -> Result<drivers::bus::MotorSpec> {
+        let id = drivers::a1::MotorId::new(self.id).ok_or_else(|| RuntimeError::InvalidField {
+            origin: "runtime config".into(),
+            field: format!("{field}.id"),
+            value: self.id.to_string(),
+            reason: "must be 1..=127".into(),
+        })?;
+        Ok(drivers::bus::MotorSpec { bus: self.bus, id })
+    }
+}
+
 fn one() -> f64 {
     1.0
 }

@@ -340,6 +340,16 @@ impl SlotLayout {
         l
     }
 
+    /// Leg slot `slot`'s model joint angle at motor angle `motor_rad`, rad.
+    pub fn model_rad(&self, slot: usize, motor_rad: f64) -> f64 {
+        self.direction[slot] * motor_rad + self.offset_rad[slot]
+    }
+
+    /// Leg slot `slot`'s motor angle at model joint angle `model_rad`, rad.
+    pub fn motor_rad(&self, slot: usize, model_rad: f64) -> f64 {
+        (model_rad - self.offset_rad[slot]) * self.direction[slot]
+    }
+
     /// Whether any held motor is driven (the `with_held` this layout was made with, for a
     /// config that has held joints).
     pub fn with_held(&self) -> bool {
@@ -697,11 +707,11 @@ impl Controller {
     }
 
     fn to_motor(&self, slot: usize, model_rad: f64) -> f64 {
-        (model_rad - self.layout.offset_rad[slot]) * self.layout.direction[slot]
+        self.layout.motor_rad(slot, model_rad)
     }
 
     fn to_model(&self, slot: usize, motor_rad: f64) -> f64 {
-        self.layout.direction[slot] * motor_rad + self.layout.offset_rad[slot]
+        self.layout.model_rad(slot, motor_rad)
     }
 
     fn enter(&mut self, to: ControlState, status: &mut Status) {

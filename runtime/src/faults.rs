@@ -460,7 +460,7 @@ impl FaultProfile {
                     );
                 }
                 if let Some((field, value, reason)) = f.fault.invalid() {
-                    return bad(format!("random.faults[{i}].{field}"), value, reason);
+                    return bad(format!("random.faults[{i}].fault.{field}"), value, reason);
                 }
             }
         }

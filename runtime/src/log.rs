@@ -19,6 +19,7 @@
 //! its own; metadata `run` describes the run (including `start_walking` and `with_held`,
 //! which replay needs) and `log_stats` counts written and dropped records.
 
+use crate::config::RuntimeConfig;
 use crate::controller::{
     CommandMode, ControlState, JointCommand, SlotLayout, TickInput, OUTPUTS, SLOTS,
 };
@@ -156,24 +157,30 @@ pub struct LogContext {
     pub zstd: bool,
 }
 
+/// The joint name of every driven slot of `layout` (`None`: not driven, not logged).
+pub fn joint_names(config: &RuntimeConfig, layout: &SlotLayout) -> [Option<String>; SLOTS] {
+    let mut names: [Option<String>; SLOTS] = Default::default();
+    for (slot, name) in names.iter_mut().enumerate() {
+        if !layout.present[slot] {
+            continue;
+        }
+        *name = if slot < crate::controller::LEG_SLOTS {
+            Some(config.leg_motors[slot].joint.clone())
+        } else {
+            config
+                .held
+                .get(slot - crate::controller::LEG_SLOTS)
+                .map(|h| h.motor.joint.clone())
+        };
+    }
+    names
+}
+
 impl LogContext {
     /// The context of a run of `setup` with this slot layout.
     pub fn new(setup: &crate::Setup, layout: &SlotLayout) -> Self {
         let (config, gait) = (&setup.config, &setup.gait);
-        let mut joint_names: [Option<String>; SLOTS] = Default::default();
-        for (slot, name) in joint_names.iter_mut().enumerate() {
-            if !layout.present[slot] {
-                continue;
-            }
-            *name = if slot < crate::controller::LEG_SLOTS {
-                Some(config.leg_motors[slot].joint.clone())
-            } else {
-                config
-                    .held
-                    .get(slot - crate::controller::LEG_SLOTS)
-                    .map(|h| h.motor.joint.clone())
-            };
-        }
+        let joint_names = joint_names(config, layout);
         let mut output_names: [String; OUTPUTS] = Default::default();
         for (i, o) in gait.outputs.iter().enumerate().take(OUTPUTS) {
             output_names[i] = o.name.clone();

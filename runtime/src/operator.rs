@@ -125,13 +125,13 @@ impl CommandSink for SharedHandle {
 /// `e`/`estop`/`x` (case-insensitive, surrounding blanks ignored); anything else is `None`.
 pub fn parse_key(line: &str) -> Option<OperatorCommand> {
     match line.trim().to_ascii_lowercase().as_str() {
-        "s" | "start" => Some(OperatorCommand::Start),
-        "w" | "walk" => Some(OperatorCommand::Walk),
-        "p" | "stop" => Some(OperatorCommand::Stop),
-        "d" | "damp" => Some(OperatorCommand::Damp),
-        "r" | "reset" => Some(OperatorCommand::Reset),
-        "e" | "x" | "estop" | "e-stop" => Some(OperatorCommand::EStop),
-        _ => None,
+        "s" => Some(OperatorCommand::Start),
+        "w" => Some(OperatorCommand::Walk),
+        "p" => Some(OperatorCommand::Stop),
+        "d" => Some(OperatorCommand::Damp),
+        "r" => Some(OperatorCommand::Reset),
+        "e" | "x" | "e-stop" => Some(OperatorCommand::EStop),
+        name => OperatorCommand::from_name(name),
     }
 }
 
@@ -191,16 +191,9 @@ impl OperatorMessage {
 
     /// The command, or `None` for an unknown code (a message of another version).
     pub fn command(&self) -> Option<OperatorCommand> {
-        [
-            OperatorCommand::Start,
-            OperatorCommand::Walk,
-            OperatorCommand::Stop,
-            OperatorCommand::Damp,
-            OperatorCommand::Reset,
-            OperatorCommand::EStop,
-        ]
-        .into_iter()
-        .find(|&c| Self::code(c) == self.code)
+        OperatorCommand::ALL
+            .into_iter()
+            .find(|&c| Self::code(c) == self.code)
     }
 }
 

@@ -29,8 +29,8 @@ use crate::controller::{
     TickOutput, SLOTS,
 };
 use crate::io::ImuSample;
-use crate::log::{exact_from_json, LogContext, CHANNELS};
-use crate::log_read::{check_schema_version, log_err, read_bytes, top_level};
+use crate::log::{exact_from_json, joint_names, CHANNELS};
+use crate::log_read::{check_schema_version, log_err, read_bytes, top_level, TopLevel};
 use crate::{Result, Setup};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -73,9 +73,8 @@ pub struct ReplayReport {
     pub values_compared: u64,
     /// The first difference, if any.
     pub divergence: Option<Divergence>,
-    /// The replayed controller's state after the last tick.
-    pub final_state: ControlState,
-    /// The states it went through, in order (consecutive repeats merged).
+    /// The states the replayed controller went through, in order (consecutive repeats merged;
+    /// never empty: the first is its state before the first tick).
     pub states: Vec<ControlState>,
     /// The log was cut off here (replay covers every tick before it).
     pub truncated: Option<String>,
@@ -298,11 +297,9 @@ fn metadata_bool(path: &Path, value: Option<&str>, key: &str) -> Result<bool> {
     }
 }
 
-/// The controller a log was recorded with, as it was at its first tick, and the joint name of
-/// every driven slot.
-pub fn controller_of_log(path: &Path) -> Result<(Setup, Controller, TickOutput)> {
-    let bytes = read_bytes(path)?;
-    let top = top_level(path, &bytes)?;
+/// The controller the log `path` (top-level records `top`) was recorded with, as it was before
+/// its first tick, with the output the loop starts from.
+fn controller_of_log(path: &Path, top: &TopLevel) -> Result<(Setup, Controller, TickOutput)> {
     let setup = top.setup(path)?;
     let with_held = metadata_bool(path, top.metadata_value("run", "with_held"), "with_held")?;
     let start_walking = metadata_bool(
@@ -322,9 +319,9 @@ pub fn controller_of_log(path: &Path) -> Result<(Setup, Controller, TickOutput)>
 /// Replay `path` through the controller of this build; see the module docs.
 pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
     let path = path.as_ref();
-    let (setup, mut controller, mut out) = controller_of_log(path)?;
-    let names = LogContext::new(&setup, controller.layout()).joint_names;
     let bytes = read_bytes(path)?;
+    let (setup, mut controller, mut out) = controller_of_log(path, &top_level(path, &bytes)?)?;
+    let names = joint_names(&setup.config, controller.layout());
     let stream =
         mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
             .map_err(|e| log_err(path, e))?;
@@ -333,7 +330,6 @@ pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
         ticks: 0,
         values_compared: 0,
         divergence: None,
-        final_state: controller.state(),
         states: vec![controller.state()],
         truncated: None,
     };
@@ -394,7 +390,6 @@ pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
         }
         controller.tick(&input, &mut out);
         report.ticks += 1;
-        report.final_state = out.status.state;
         if report.states.last() != Some(&out.status.state) {
             report.states.push(out.status.state);
         }

@@ -28,7 +28,7 @@ use crate::telemetry::{LoopStats, StateSample};
 use crate::{Result, RuntimeError, Setup};
 use core::time::Duration;
 use drivers::a1::{Command, MotorId, Reply};
-use drivers::bus::{BusError, MotorBus, MotorSpec};
+use drivers::bus::{BusError, MotorBus};
 use std::path::PathBuf;
 
 /// Where the loop's time comes from.
@@ -352,15 +352,10 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         } else {
             &config.held[slot - LEG_SLOTS].motor
         };
-        let id = MotorId::new(m.id).ok_or_else(|| RuntimeError::InvalidField {
-            origin: "runtime config".into(),
-            field: format!("motor of slot {slot}.id"),
-            value: m.id.to_string(),
-            reason: "must be 1..=127".into(),
-        })?;
-        specs.push(MotorSpec { bus: m.bus, id });
+        let spec = m.spec(&format!("motor of slot {slot}"))?;
+        specs.push(spec);
         slot_of.push(slot);
-        ids.push(id);
+        ids.push(spec.id);
     }
     for bus in 0..config.loop_.bus_count {
         let count = specs.iter().filter(|s| s.bus == bus).count();

@@ -198,15 +198,8 @@ pub fn sim_backend(setup: &Setup, options: &SimWalkOptions) -> Result<SimBus<Rob
         } else {
             LegJoint::Hip
         };
-        let id = drivers::a1::MotorId::new(m.id).ok_or_else(|| {
-            invalid(
-                &format!("leg_motors[{k}].id"),
-                m.id.to_string(),
-                "must be 1..=127",
-            )
-        })?;
         motors.push(SimMotor {
-            spec: drivers::bus::MotorSpec { bus: m.bus, id },
+            spec: m.spec(&format!("leg_motors[{k}]"))?,
             joint: sim.joint_index(side, which),
         });
     }
@@ -365,27 +358,9 @@ impl FaultySim {
                 value: value.to_string(),
                 reason: "out of range".into(),
             })?;
-        let ids = setup
-            .config
-            .leg_motors
-            .iter()
-            .enumerate()
-            .map(|(slot, m)| {
-                MotorId::new(m.id).ok_or_else(|| RuntimeError::InvalidField {
-                    origin: "runtime config".into(),
-                    field: format!("leg_motors[{slot}].id"),
-                    value: m.id.to_string(),
-                    reason: "must be 1..=127".into(),
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let count = ids.len();
-        let motors: [MotorId; 4] = ids.try_into().map_err(|_| RuntimeError::InvalidField {
-            origin: "runtime config".into(),
-            field: "leg_motors".into(),
-            value: format!("{count} motors"),
-            reason: "the simulated robot has 4 leg motors".into(),
-        })?;
+        let leg = &setup.config.leg_motors;
+        let id = |slot: usize| leg[slot].spec(&format!("leg_motors[{slot}]")).map(|s| s.id);
+        let motors = [id(0)?, id(1)?, id(2)?, id(3)?];
         Ok(Self {
             belt_speed_mps: bus.plant().config().belt_speed_mps,
             half_period_s: 0.5 / bus.config().control_rate_hz,
@@ -397,16 +372,6 @@ impl FaultySim {
             started: 0,
             bus,
         })
-    }
-
-    /// The simulated bus (and through it the robot).
-    pub fn bus(&self) -> &SimBus<RobotSim> {
-        &self.bus
-    }
-
-    /// Faults started so far.
-    pub fn started(&self) -> u64 {
-        self.started
     }
 
     /// Heal the faults that have ended and apply those that have begun at `t_s`.
@@ -640,10 +605,7 @@ impl SoakReport {
         self.steps += report.steps as u64;
         self.faults += report.faults_started;
         self.missing_replies += s.missing_replies;
-        self.wire.lost += report.wire.lost;
-        self.wire.corrupted += report.wire.corrupted;
-        self.wire.delayed += report.wire.delayed;
-        self.wire.delayed_late += report.wire.delayed_late;
+        self.wire += report.wire;
     }
 }
 
@@ -854,10 +816,8 @@ pub fn joint_bench_backend(
     }
     let mut motors = Vec::with_capacity(n);
     for (joint, m) in setup.config.leg_motors.iter().enumerate() {
-        let id = drivers::a1::MotorId::new(m.id)
-            .ok_or_else(|| invalid(format!("motor id {} out of range", m.id)))?;
         motors.push(SimMotor {
-            spec: drivers::bus::MotorSpec { bus: m.bus, id },
+            spec: m.spec(&format!("leg_motors[{joint}]"))?,
             joint,
         });
     }

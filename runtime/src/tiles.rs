@@ -13,7 +13,7 @@
 //! put during a step. The step drawn is the middle one of the complete steps in the log (a
 //! step whose start and end are both in the log).
 
-use crate::controller::ControlState;
+use crate::controller::{ControlState, SlotLayout};
 use crate::log::CHANNELS;
 use crate::log_read::{check_schema_version, log_err, read_bytes, top_level};
 use crate::Result;
@@ -69,14 +69,29 @@ struct Row {
     motor_q: Option<[f64; 4]>,
 }
 
+/// A tick of the walk with everything the tiles need.
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    t_s: f64,
+    phase: f64,
+    stance: Side,
+    steps: u32,
+    pitch_rad: f64,
+    motor_q_rad: [f64; 4],
+}
+
 impl Row {
-    fn complete(&self) -> bool {
-        self.phase.is_some()
-            && self.stance.is_some()
-            && self.steps.is_some()
-            && self.walking == Some(true)
-            && self.pitch.is_some()
-            && self.motor_q.is_some()
+    /// The sample of a walking tick whose channels were all read.
+    fn sample(&self, t_s: f64) -> Option<Sample> {
+        (self.walking == Some(true)).then_some(())?;
+        Some(Sample {
+            t_s,
+            phase: self.phase?,
+            stance: self.stance?,
+            steps: self.steps?,
+            pitch_rad: self.pitch?,
+            motor_q_rad: self.motor_q?,
+        })
     }
 }
 
@@ -154,15 +169,14 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
             }
         }
     }
-    let rows: Vec<(f64, Row)> = rows
+    let rows: Vec<Sample> = rows
         .into_iter()
-        .filter(|(_, r)| r.complete())
-        .map(|(t, r)| (t as f64 * 1e-9, r))
+        .filter_map(|(t, r)| r.sample(t as f64 * 1e-9))
         .collect();
     // Runs of equal step counters; a complete step has a different one before and after it.
     let mut runs: Vec<(usize, usize)> = Vec::new();
     for i in 0..rows.len() {
-        if i == 0 || rows[i].1.steps != rows[i - 1].1.steps {
+        if i == 0 || rows[i].steps != rows[i - 1].steps {
             runs.push((i, i + 1));
         } else if let Some(last) = runs.last_mut() {
             last.1 = i + 1;
@@ -180,7 +194,7 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
     }
     let (a, b) = runs[runs.len() / 2];
     let step_rows = &rows[a..b];
-    let step = step_rows[0].1.steps.unwrap_or(0);
+    let step = step_rows[0].steps;
 
     let model = &setup.model;
     let legs = model.legs()?;
@@ -196,40 +210,37 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
     for (k, name) in names.iter().enumerate() {
         coords[k] = model.joints[model.require_joint(name)?].coordinate;
     }
-    let mut figure_at = |t_s: f64, r: &Row| -> Result<StickFigure> {
-        let (Some(phase), Some(stance), Some(pitch), Some(motor_q)) =
-            (r.phase, r.stance, r.pitch, r.motor_q)
-        else {
-            return Err(log_err(path, "tiles: incomplete sample"));
-        };
-        q[2] = pitch;
-        for (k, m) in setup.config.leg_motors.iter().enumerate() {
-            q[coords[k]] = m.direction * motor_q[k] + m.offset_rad;
+    let layout = SlotLayout::new(&setup.config, false);
+    let mut figure_at = |r: &Sample| -> Result<StickFigure> {
+        q[2] = r.pitch_rad;
+        for (k, &c) in coords.iter().enumerate() {
+            q[c] = layout.model_rad(k, r.motor_q_rad[k]);
         }
         let st = model.body_poses(&q)?;
         let hip = st.pose[0].xz_m;
         let com = model.body_com_in(&st, 0);
-        let foot_stance = model.frame_position_in(&st, legs.side(stance).foot);
+        let foot_stance = model.frame_position_in(&st, legs.side(r.stance).foot);
         let shift = |p: [f64; 2]| [p[0] - foot_stance[0], p[1] - foot_stance[1]];
         let leg = |side: Side| -> Result<[[f64; 2]; 3]> {
             let l = legs.side(side);
+            let joint = |j: usize| shift(st.pose[model.joints[j].body].xz_m);
             Ok([
-                shift(model.joint_position(&q, l.hip)?),
-                shift(model.joint_position(&q, l.knee)?),
+                joint(l.hip),
+                joint(l.knee),
                 shift(model.frame_position_in(&st, l.foot)),
             ])
         };
         Ok(StickFigure {
-            phase,
-            t_s,
-            stance,
-            pitch_rad: pitch,
+            phase: r.phase,
+            t_s: r.t_s,
+            stance: r.stance,
+            pitch_rad: r.pitch_rad,
             torso_m: [
                 shift(hip),
                 shift([2.0 * com[0] - hip[0], 2.0 * com[1] - hip[1]]),
             ],
-            stance_leg_m: leg(stance)?,
-            swing_leg_m: leg(stance.other())?,
+            stance_leg_m: leg(r.stance)?,
+            swing_leg_m: leg(r.stance.other())?,
         })
     };
     let mut figures = Vec::with_capacity(count);
@@ -238,17 +249,15 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
         let nearest = step_rows
             .iter()
             .min_by(|x, y| {
-                let dx = (x.1.phase.unwrap_or(f64::NAN) - target).abs();
-                let dy = (y.1.phase.unwrap_or(f64::NAN) - target).abs();
-                dx.total_cmp(&dy)
+                (x.phase - target)
+                    .abs()
+                    .total_cmp(&(y.phase - target).abs())
             })
             .ok_or_else(|| log_err(path, "tiles: empty step"))?;
-        figures.push(figure_at(nearest.0, &nearest.1)?);
+        figures.push(figure_at(nearest)?);
     }
-    let last = figure_at(
-        step_rows[step_rows.len() - 1].0,
-        &step_rows[step_rows.len() - 1].1,
-    )?;
+    let end = &step_rows[step_rows.len() - 1];
+    let last = figure_at(end)?;
     Ok(GaitTiles {
         robot: model.name.clone(),
         design_m: (
@@ -256,7 +265,7 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
             setup.gait.design.shin_length_m,
         ),
         step,
-        step_duration_s: step_rows[step_rows.len() - 1].0 - step_rows[0].0,
+        step_duration_s: end.t_s - step_rows[0].t_s,
         step_length_m: last.swing_leg_m[2][0],
         figures,
     })

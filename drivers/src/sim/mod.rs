@@ -453,8 +453,7 @@ impl RobotSim {
                 Contact::Air
             };
         }
-        let dy = self.model.dynamics(&self.q, &self.dq)?;
-        self.factor(&dy.mass_matrix)?;
+        self.factor_present()?;
         self.project(None)?;
         self.fallen = None;
         self.max_penetration_m = 0.0;
@@ -504,9 +503,7 @@ impl RobotSim {
         if let Some((_, v)) = self.imu_last.as_mut() {
             v[0] += step;
         }
-        let dy = self.model.dynamics(&self.q, &self.dq)?;
-        self.factor(&dy.mass_matrix)?;
-        self.poses = None;
+        self.factor_present()?;
         self.project(None).map(|_| ())
     }
 
@@ -572,10 +569,16 @@ impl RobotSim {
         self.check_fall()
     }
 
-    fn factor(&mut self, mass_matrix: &nalgebra::DMatrix<f64>) -> Result<()> {
+    /// Body states, D and H at the present (q, q̇) into the step's buffers, and D factored.
+    fn factor_present(&mut self) -> Result<BodyStates<f64>> {
+        self.poses = None;
+        let st = self.model.body_states(&self.q, &self.dq)?;
+        self.model
+            .dynamics_into(&st, &mut self.mass_matrix, &mut self.drift)?;
         self.solver
-            .factor_mass(mass_matrix)
-            .map_err(|_| RobotSimError::NotPositiveDefinite { t_s: self.t_s })
+            .factor_mass(&self.mass_matrix)
+            .map_err(|_| RobotSimError::NotPositiveDefinite { t_s: self.t_s })?;
+        Ok(st)
     }
 
     /// Stance frames (and their side indices) in left-right order.
@@ -596,13 +599,7 @@ impl RobotSim {
     /// Integrate up to `h`; returns the time integrated (less than `h` if a touchdown
     /// interrupted the step at that instant).
     fn sub_step(&mut self, h: f64, detect_touchdown: bool) -> Result<f64> {
-        self.poses = None;
-        let st = self.model.body_states(&self.q, &self.dq)?;
-        self.model
-            .dynamics_into(&st, &mut self.mass_matrix, &mut self.drift)?;
-        self.solver
-            .factor_mass(&self.mass_matrix)
-            .map_err(|_| RobotSimError::NotPositiveDefinite { t_s: self.t_s })?;
+        let st = self.factor_present()?;
         for (f, hv) in self.generalized_force.iter_mut().zip(self.drift.iter()) {
             *f = -hv;
         }
@@ -780,9 +777,7 @@ impl RobotSim {
     /// Plastic impact of foot `i` at the present state (the foot is on the ground).
     fn touchdown(&mut self, i: usize) -> Result<()> {
         let kinetic_energy_before_j = self.model.kinetic_energy(&self.q, &self.dq)?;
-        let st = self.model.body_poses(&self.q)?;
-        let dy = self.model.dynamics(&self.q, &self.dq)?;
-        self.factor(&dy.mass_matrix)?;
+        let st = self.factor_present()?;
         let p = self.model.frame_position_in(&st, self.feet[i]);
         self.contact[i] = Contact::Stance {
             anchor_xz_m: [p[0], 0.0],
@@ -862,14 +857,18 @@ impl RobotSim {
         if k == 0 {
             return Ok(false);
         }
+        let computed;
         let st = match poses {
-            Some(st) => *st,
-            None => self.model.body_poses(&self.q)?,
+            Some(st) => st,
+            None => {
+                computed = self.model.body_poses(&self.q)?;
+                &computed
+            }
         };
-        self.solver.set_contacts(&self.model, &st, &frames[..k]);
+        self.solver.set_contacts(&self.model, st, &frames[..k]);
         let mut c = [0.0; 2 * MAX_CONTACTS];
         for r in 0..k {
-            let p = self.model.frame_position_in(&st, frames[r]);
+            let p = self.model.frame_position_in(st, frames[r]);
             if let Contact::Stance { anchor_xz_m } = self.contact[sides[r]] {
                 c[2 * r] = anchor_xz_m[0] - p[0];
                 c[2 * r + 1] = anchor_xz_m[1] - p[1];
