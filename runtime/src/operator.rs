@@ -335,16 +335,12 @@ mod tests {
         assert_eq!(parse_key("p"), Some(OperatorCommand::Stop));
         assert_eq!(parse_key("walk please"), None);
         assert_eq!(parse_key(""), None);
-        for cmd in [
-            OperatorCommand::Start,
-            OperatorCommand::Walk,
-            OperatorCommand::Stop,
-            OperatorCommand::Damp,
-            OperatorCommand::Reset,
-            OperatorCommand::EStop,
-        ] {
+        for cmd in OperatorCommand::ALL {
             assert_eq!(OperatorMessage::new(cmd).command(), Some(cmd));
+            // Every command's log name is also its keyboard word.
+            assert_eq!(parse_key(cmd.name()), Some(cmd));
         }
+
         assert_eq!(OperatorMessage { code: 99 }.command(), None);
     }
 
