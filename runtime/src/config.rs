@@ -169,6 +169,11 @@ pub struct WalkConfig {
     /// into the swing leg and the torso again (runtime::controller docs).
     #[serde(default)]
     pub phase_observer_hz: f64,
+    /// Length of a Stop's braking step, m: after Stop, the step under way ends, then one longer
+    /// step whose landing leaves the walking speed within what double support absorbs; Stand
+    /// then holds the landing pose (runtime::controller docs).
+    #[serde(default = "default_stop_step_length_m")]
+    pub stop_step_length_m: f64,
 }
 
 /// Torso pitch estimator (see [`crate::estimator`]).
@@ -201,6 +206,10 @@ fn default_max_implausible_imu_samples() -> u32 {
 
 fn default_max_step_duration_factor() -> f64 {
     3.0
+}
+
+fn default_stop_step_length_m() -> f64 {
+    0.30
 }
 
 fn default_impact_min_phase() -> f64 {
@@ -525,6 +534,7 @@ impl RuntimeConfig {
         non_negative("walk.touchdown_below_m", w.touchdown_below_m)?;
         non_negative("walk.impact_min_phase", w.impact_min_phase)?;
         non_negative("walk.reference_lead_s", w.reference_lead_s)?;
+        positive("walk.stop_step_length_m", w.stop_step_length_m)?;
         if w.reference_lead_s > 0.02 {
             return Err(bad(
                 "walk.reference_lead_s",

@@ -11,6 +11,8 @@
 //! Walk/Stop: q = [0, 0, θ̂, legs…] → θ(q), θ̇ (model::phase) → τ, τ̇ → y^d(τ), ẏ^d = y^d'(τ)·τ̇
 //!            swing-foot height + τ ≥ τ_switch, debounced → stance switch (relabel outputs)
 //! Ramp: minimum-jerk move from the measured pose to y^d(0); Stand: hold y^d(0)
+//! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
+//!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles
 //!   ▼
 //! TickOutput { commands[14] (PD or damping, motor side), status }
 //! ```
@@ -19,8 +21,23 @@
 //! Motor slots: 0..4 are the leg joints (left hip, left knee, right hip, right knee); 4..14 the
 //! held joints of the config, in order. Slots without a motor (fewer held joints, or held
 //! motors absent in simulation) have `present == false` in the [`SlotLayout`].
+//!
+//! # Stop: why a braking step
+//! The gait lands each step with the torso moving at ~0.40 m/s. With point feet, double support
+//! can only bring the robot to rest if its capture point `x + ẋ/ω` (ω = √(g/h)) lies between the
+//! feet; over a 0.15 m step it lies about 3 cm beyond the front foot, so holding any pose after
+//! a normal step vaults the robot over it (measured). The braking step lands the front foot
+//! `walk.stop_step_length_m` (0.30 m) ahead instead: the step's stance-leg angle runs on to the
+//! braking pose's θ (so τ still ends at 1) and, from τ = 0.3, the outputs blend (minimum jerk)
+//! from y^d(τ) into that pose, found by inverse kinematics at start-up
+//! (`double_support`: both feet down, the torso where the gait's first pose has it relative to
+//! the feet, lowered to keep the legs' reach). The longer landing loses more speed in the
+//! impact and leaves the capture point inside the feet; Stand then holds the landed joint
+//! angles and the robot rocks from foot to foot a few times and comes to rest
+//! (`runtime/tests/stop_sim.rs`).
 
 use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
+use crate::double_support::{Geometry, TorsoPose};
 use crate::estimator::{EstimatorParams, PitchEstimator};
 use crate::io::ImuSample;
 use crate::safety::{SafetyInput, SafetyMonitor, Trip};
@@ -63,7 +80,7 @@ pub enum OperatorCommand {
     Start,
     /// Stand → Walk.
     Walk,
-    /// Walk → Stop: finish the step, then Stand.
+    /// Walk → Stop: finish the step, take the braking step, then Stand.
     Stop,
     /// Any → Damping, orderly (no trip).
     Damp,
@@ -114,7 +131,7 @@ pub enum ControlState {
     Stand = 2,
     /// Walking the gait.
     Walk = 3,
-    /// Walking until the current step ends, then Stand.
+    /// Walking until the current step ends, then one braking step, then Stand.
     Stop = 4,
     /// Every motor damped; latched until `Reset`.
     Damping = 5,
@@ -475,6 +492,49 @@ impl GaitTable {
     }
 }
 
+/// The torso pose of the gait's first pose relative to its stance foot (the planned pitch;
+/// level if the gait has no initial state), and where the other foot is.
+fn first_pose_torso(geometry: &Geometry, gait: &GaitTable) -> Option<(TorsoPose, [f64; 2])> {
+    let stance = gait.first_stance;
+    let mut leg_q = [0.0; LEG_SLOTS];
+    for i in 0..OUTPUTS {
+        leg_q[gait.out_slot[side_index(stance)][i]] = gait.eval(i, 0.0).0;
+    }
+    let pitch = gait.initial_pitch.map_or(0.0, |p| p.0);
+    let m = geometry.measure(stance, pitch, 0.0, &leg_q, &[0.0; LEG_SLOTS])?;
+    Some((m.pose, m.other_foot_xz_m))
+}
+
+/// The braking step's touchdown pose for a step of `length_m`: both feet down, the torso at the
+/// gait's first-pose pitch and at the same fraction of the way between the feet, lowered so the
+/// torso stays as far from the feet as there. `None` if the legs cannot reach it.
+fn braking_touchdown(geometry: &Geometry, gait: &GaitTable, length_m: f64) -> Option<Lunge> {
+    let (stand, other) = first_pose_torso(geometry, gait)?;
+    if !(length_m.is_finite() && length_m > 0.0) || other[0].abs() < 1e-3 {
+        return None;
+    }
+    let front = gait.first_stance;
+    let rear = front.other();
+    let fraction = stand[0] / other[0];
+    let half = 0.5 * other[0];
+    let z2 = stand[1] * stand[1] + half * half - 0.25 * length_m * length_m;
+    if z2 <= 0.0 {
+        return None;
+    }
+    let pose = [-fraction * length_m, z2.sqrt(), stand[2]];
+    let mut warm = [0.0; LEG_SLOTS];
+    for i in 0..OUTPUTS {
+        warm[gait.out_slot[side_index(front)][i]] = gait.eval(i, 0.0).0;
+    }
+    let (leg_q, _) = geometry.solve(front, pose, [0.0; 3], [-length_m, 0.0], &warm)?;
+    let mut dy_end = [0.0; OUTPUTS];
+    for (i, d) in dy_end.iter_mut().enumerate() {
+        *d = leg_q[gait.out_slot[side_index(rear)][i]] - gait.eval(i, 1.0).0;
+    }
+    let theta_rad = geometry.stance_leg_angle(rear, pose, &leg_q)?;
+    Some(Lunge { dy_end, theta_rad })
+}
+
 /// Minimum-jerk blend `s(u) = 10u³ − 15u⁴ + 6u⁵` and its derivative ds/du (peak 1.875).
 fn min_jerk(u: f64) -> (f64, f64) {
     let u = u.clamp(0.0, 1.0);
@@ -488,8 +548,26 @@ fn min_jerk(u: f64) -> (f64, f64) {
 /// How well the planned initial pitch is known when walking starts from the planned state, rad.
 const PLANNED_PITCH_SIGMA_RAD: f64 = 0.002;
 
+/// The braking step follows the gait up to this phase, then blends into its touchdown pose.
+const BRAKE_BLEND_FROM: f64 = 0.3;
+
+/// Stand starts this long after the braking step's touchdown, s: the motor replies then
+/// report the post-impact pose.
+const STAND_DELAY_S: f64 = 0.005;
+
 /// Peak of ds/du of [`min_jerk`].
 const MIN_JERK_PEAK_RATE: f64 = 1.875;
+
+/// The braking step of a Stop: a longer step whose touchdown leaves the walking speed inside
+/// what double support can absorb (see [`Controller::lunge_pose`]).
+#[derive(Clone, Copy, Debug)]
+struct Lunge {
+    /// Offset of the outputs (stance hip, stance knee, swing hip, swing knee) at its touchdown
+    /// from the gait's touchdown pose y^d(1), rad.
+    dy_end: [f64; OUTPUTS],
+    /// Stance-leg angle at its touchdown, rad (replaces θ⁻ for the phase).
+    theta_rad: f64,
+}
 
 #[derive(Clone, Copy, Debug)]
 struct Ramp {
@@ -545,6 +623,15 @@ pub struct Controller {
     /// Phase observer state: (τ̂, τ̂̇, time of the last update) once walking.
     phase_hat: Option<(f64, f64, f64)>,
     ramp: Ramp,
+    /// Stand after a Stop holds these leg joint angles, model rad (`None`: Stand holds the
+    /// gait's first pose, as after Ramp).
+    stand_hold: Option<[f64; LEG_SLOTS]>,
+    /// When the braking step of a Stop touched down (Stand starts [`STAND_DELAY_S`] later).
+    stop_touchdown_t_s: Option<f64>,
+    /// The braking step of a Stop: its touchdown pose and stance-leg angle.
+    lunge: Lunge,
+    /// The current step is the braking step.
+    braking: bool,
     trip: Option<Trip>,
     motors: [MotorSample; SLOTS],
     last_imu_t_s: Option<f64>,
@@ -592,6 +679,26 @@ impl Controller {
                 ),
             });
         }
+        let geometry = Geometry {
+            model: &model,
+            legs: &legs,
+            dof,
+            q_template: &q_template,
+            leg_coord: &leg_coord,
+        };
+        let stop_step_m = config.walk.stop_step_length_m;
+        let lunge = braking_touchdown(&geometry, &gait_table, stop_step_m).ok_or_else(|| {
+            RuntimeError::InvalidField {
+                origin: "runtime config".into(),
+                field: "walk.stop_step_length_m".into(),
+                value: stop_step_m.to_string(),
+                reason: format!(
+                    "the braking step's touchdown pose is out of the legs' reach \
+                         (thigh {:.3} m, shin {:.3} m)",
+                    gait.design.thigh_length_m, gait.design.shin_length_m
+                ),
+            }
+        })?;
         let layout = SlotLayout::new(config, with_held);
         let zero_ramp = Ramp {
             start_t_s: 0.0,
@@ -641,6 +748,10 @@ impl Controller {
             last_foot: None,
             phase_hat: None,
             ramp: zero_ramp,
+            stand_hold: None,
+            stop_touchdown_t_s: None,
+            lunge,
+            braking: false,
             trip: None,
             motors: [MotorSample::default(); SLOTS],
             last_imu_t_s: None,
@@ -756,6 +867,7 @@ impl Controller {
             (OperatorCommand::Damp, _) => self.enter(S::Damping, status),
             (OperatorCommand::Start, S::Idle) => {
                 self.stance = self.gait.first_stance;
+                self.stand_hold = None;
                 self.begin_ramp(t_s);
                 self.enter(S::Ramp, status);
             }
@@ -765,7 +877,11 @@ impl Controller {
                 self.steps = 0;
                 self.enter(S::Walk, status);
             }
-            (OperatorCommand::Stop, S::Walk) => self.enter(S::Stop, status),
+            (OperatorCommand::Stop, S::Walk) => {
+                self.stop_touchdown_t_s = None;
+                self.braking = false;
+                self.enter(S::Stop, status);
+            }
             (OperatorCommand::Reset, S::Damping) => {
                 self.trip = None;
                 self.safety.reset_counters();
@@ -874,12 +990,7 @@ impl Controller {
                         self.pd(slot, r.from[slot] + s * dq, dq * ds_du * du_dt, 0.0);
                 }
             }
-            ControlState::Stand => {
-                let pose = self.stand_pose(self.stance);
-                for (slot, &q) in pose.iter().enumerate() {
-                    out.commands[slot] = self.pd(slot, q, 0.0, 0.0);
-                }
-            }
+            ControlState::Stand => self.stand_commands(&mut out.commands),
             ControlState::Walk | ControlState::Stop => {
                 let mut eval = self.walk_references(t, &leg_q, &leg_dq);
                 self.observe_phase(t, &mut eval);
@@ -923,8 +1034,12 @@ impl Controller {
                     self.touchdown_ticks = 0;
                     self.last_foot = None;
                     self.steps = self.steps.saturating_add(1);
+                    // Stop: the step under way ends, then the braking step, then Stand.
                     if self.state == ControlState::Stop {
-                        self.enter(ControlState::Stand, status);
+                        if self.braking {
+                            self.stop_touchdown_t_s = Some(t);
+                        }
+                        self.braking = !self.braking;
                     }
                     // The new step starts at the measured phase, at the speed of the old one.
                     let rate = self.phase_hat.map_or(0.0, |(_, r, _)| r);
@@ -934,25 +1049,20 @@ impl Controller {
                 }
                 (y_des, dy_des) = (eval.y, eval.dy);
                 (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
-                let stance = side_index(self.stance);
-                let walking = self.state != ControlState::Stand;
-                for i in 0..OUTPUTS {
-                    let slot = self.gait.out_slot[stance][i];
-                    let dir = self.layout.direction[slot];
-                    let (q, dq, ff) = if walking {
-                        (
-                            y_des[i],
-                            dy_des[i],
-                            self.feedforward_nm[i]
-                                + self.plan_feedforward_scale * eval.feedforward_nm[i],
-                        )
-                    } else {
-                        (self.gait.eval(i, 0.0).0, 0.0, 0.0)
-                    };
-                    out.commands[slot] = self.pd(slot, self.to_motor(slot, q), dir * dq, dir * ff);
+                // The braking step has landed: once the motors report the post-impact pose (the
+                // replies lag the impact by a tick), Stand holds it.
+                if self.state == ControlState::Stop
+                    && self
+                        .stop_touchdown_t_s
+                        .is_some_and(|t0| t - t0 >= STAND_DELAY_S - 1e-9)
+                {
+                    self.stand_hold = Some(leg_q);
+                    self.enter(ControlState::Stand, status);
                 }
-                for slot in LEG_SLOTS..SLOTS {
-                    out.commands[slot] = self.pd(slot, self.layout.held_center_rad[slot], 0.0, 0.0);
+                if self.state == ControlState::Stand {
+                    self.stand_commands(&mut out.commands);
+                } else {
+                    self.walk_commands(&eval, &mut out.commands);
                 }
             }
         }
@@ -979,6 +1089,49 @@ impl Controller {
             new_trip: status.new_trip,
             leg_q_rad: leg_q,
         };
+    }
+
+    /// Walk and Stop: PD on the desired outputs (relabeled to the stance leg's slots) with the
+    /// plan's feed-forward; the held joints at their positions.
+    fn walk_commands(&self, eval: &WalkEval, commands: &mut [JointCommand; SLOTS]) {
+        let stance = side_index(self.stance);
+        for i in 0..OUTPUTS {
+            let slot = self.gait.out_slot[stance][i];
+            let dir = self.layout.direction[slot];
+            let ff = self.feedforward_nm[i] + self.plan_feedforward_scale * eval.feedforward_nm[i];
+            commands[slot] = self.pd(
+                slot,
+                self.to_motor(slot, eval.y[i]),
+                dir * eval.dy[i],
+                dir * ff,
+            );
+        }
+        self.hold_commands(commands);
+    }
+
+    fn hold_commands(&self, commands: &mut [JointCommand; SLOTS]) {
+        for (slot, command) in commands.iter_mut().enumerate().skip(LEG_SLOTS) {
+            *command = self.pd(slot, self.layout.held_center_rad[slot], 0.0, 0.0);
+        }
+    }
+
+    /// Stand: after a Stop, the joint angles of the braking step's landing; otherwise the
+    /// gait's first pose.
+    fn stand_commands(&self, commands: &mut [JointCommand; SLOTS]) {
+        match self.stand_hold {
+            Some(leg_q) => {
+                for (k, &q) in leg_q.iter().enumerate() {
+                    commands[k] = self.pd(k, self.to_motor(k, q), 0.0, 0.0);
+                }
+                self.hold_commands(commands);
+            }
+            None => {
+                let pose = self.stand_pose(self.stance);
+                for (slot, &q) in pose.iter().enumerate() {
+                    commands[slot] = self.pd(slot, q, 0.0, 0.0);
+                }
+            }
+        }
     }
 
     /// PD command for a slot with the slot's gains (leg gains or held gains).
@@ -1099,6 +1252,22 @@ impl Controller {
             // Outside [0, 1] the reference is held at its end value: no velocity.
             dy[i] = if inside { d * rate } else { 0.0 };
         }
+        // The braking step: the gait's outputs, stretched over the longer stance-leg swing,
+        // blend into the braking touchdown pose over the second part of the step.
+        if self.braking {
+            let lunge = &self.lunge;
+            let u = (s - BRAKE_BLEND_FROM) / (1.0 - BRAKE_BLEND_FROM);
+            let (b, db_du) = min_jerk(u);
+            let db = if inside && u > 0.0 && u < 1.0 {
+                db_du / (1.0 - BRAKE_BLEND_FROM) * rate
+            } else {
+                0.0
+            };
+            for i in 0..OUTPUTS {
+                y[i] += b * lunge.dy_end[i];
+                dy[i] += db * lunge.dy_end[i];
+            }
+        }
         let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
         WalkEval {
             feedforward_nm: self.gait.feedforward(s),
@@ -1144,17 +1313,19 @@ impl Controller {
             .unwrap_or(f64::NAN);
         let (phase, rate) = match self.phase_source {
             PhaseSource::StateBased => {
-                let span = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
+                // The braking step ends at its own, larger stance-leg angle.
+                let theta_end = if self.braking {
+                    self.lunge.theta_rad
+                } else {
+                    self.gait.theta_minus_rad
+                };
+                let span = theta_end - self.gait.theta_plus_rad;
                 let (theta, theta_rate) = self
                     .model
                     .stance_leg_angle_rate(&q[..dof], &dq[..dof], &self.legs, self.stance)
                     .unwrap_or((f64::NAN, 0.0));
                 (
-                    model::phase::state_phase(
-                        theta,
-                        self.gait.theta_plus_rad,
-                        self.gait.theta_minus_rad,
-                    ),
+                    model::phase::state_phase(theta, self.gait.theta_plus_rad, theta_end),
                     theta_rate / span,
                 )
             }
@@ -1326,15 +1497,47 @@ mod tests {
         // Step T from the shipped gait; touchdown needs τ ≥ 1 then 3 debounced ticks.
         assert!((period - (step_s + 0.003)).abs() < 1.5e-3, "{period}");
         assert_eq!(h.out.status.steps, 2);
-        // Stop: finish the step, then Stand on the new stance leg.
+        // Stop: finish the step, take the braking step (its references blend into the longer
+        // landing pose), then Stand holding the landing pose, two stance switches later.
         let stance_before = h.c.stance();
         assert_eq!(
             h.step(Some(OperatorCommand::Stop)).state,
             ControlState::Stop
         );
-        let s = h.run(step_s + 0.1);
-        assert_eq!(s.state, ControlState::Stand);
-        assert_eq!(s.stance, stance_before.other());
+        let s = h.run(step_s + 0.05);
+        assert_eq!(
+            (s.state, s.stance),
+            (ControlState::Stop, stance_before.other())
+        );
+        let mut landing = None;
+        for _ in 0..(step_s * 1000.0) as usize + 100 {
+            let s = h.step(None);
+            if s.state == ControlState::Stop {
+                // The braking step's references: y^d plus the blended offset (at the phase
+                // the latency compensation leads to).
+                let lead = s.phase + h.c.reference_lead_s * s.phase_rate_per_s.max(0.0);
+                let lead = lead.clamp(0.0, 1.0);
+                let u = ((lead - BRAKE_BLEND_FROM) / (1.0 - BRAKE_BLEND_FROM)).clamp(0.0, 1.0);
+                for i in 0..OUTPUTS {
+                    let want = h.c.gait.eval(i, lead).0 + min_jerk(u).0 * h.c.lunge.dy_end[i];
+                    assert!((s.y_des_rad[i] - want).abs() < 1e-9, "{i} {s:?}");
+                }
+            } else if landing.is_none() {
+                assert_eq!(s.state, ControlState::Stand);
+                landing = Some(h.input.motors);
+            }
+        }
+        let landing = landing.expect("Stand after the braking step");
+        assert_eq!(h.c.stance(), stance_before);
+        assert!(
+            h.c.lunge.dy_end.iter().any(|d| d.abs() > 0.05),
+            "{:?}",
+            h.c.lunge
+        );
+        // Stand holds the landing pose.
+        for k in 0..LEG_SLOTS {
+            assert!((h.out.commands[k].q_des_rad - landing[k].q_rad).abs() < 1e-3);
+        }
         // Orderly damping, then reset.
         assert_eq!(
             h.step(Some(OperatorCommand::Damp)).state,

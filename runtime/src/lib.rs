@@ -63,6 +63,7 @@
 
 pub mod config;
 pub mod controller;
+mod double_support;
 mod error;
 pub mod estimator;
 pub mod faults;

@@ -1,0 +1,306 @@
+//! Double support: both feet pinned on the ground, the torso carried by the legs.
+//!
+//! With both point feet down the planar robot keeps three degrees of freedom (torso x, z and
+//! pitch) for four leg motors: a torso pose the legs can reach fixes all four joint angles
+//! (inverse kinematics of two independent two-link legs). The controller uses it to find the
+//! touchdown pose of a Stop's braking step from the gait's first pose.
+//!
+//! Frames: positions are world axes `[x, z]`, relative to the stance foot. Everything here
+//! works on fixed-size arrays and never allocates.
+
+use crate::controller::LEG_SLOTS;
+use model::robot::{Legs, PlanarModel, Side, MAX_DOF};
+
+/// Torso origin x, z (m) and pitch (rad), relative to the stance foot.
+pub type TorsoPose = [f64; 3];
+
+/// The kinematic context of double support: the model, which coordinates the leg slots are and
+/// the template configuration (design coordinates filled in).
+#[derive(Clone, Copy, Debug)]
+pub struct Geometry<'a> {
+    /// The robot.
+    pub model: &'a PlanarModel,
+    /// Its legs.
+    pub legs: &'a Legs,
+    /// Number of generalized coordinates.
+    pub dof: usize,
+    /// A configuration with the design coordinates set (base and legs are overwritten).
+    pub q_template: &'a [f64; MAX_DOF],
+    /// Generalized coordinate of each leg slot (left hip, left knee, right hip, right knee).
+    pub leg_coord: &'a [usize; LEG_SLOTS],
+}
+
+/// The leg slots (hip, knee) of `side`.
+pub fn slots(side: Side) -> [usize; 2] {
+    match side {
+        Side::Left => [0, 1],
+        Side::Right => [2, 3],
+    }
+}
+
+/// A measured double-support state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measured {
+    /// Torso pose relative to the stance foot.
+    pub pose: TorsoPose,
+    /// Its rate (m/s, m/s, rad/s), assuming the stance foot does not move.
+    pub rate: TorsoPose,
+    /// The other foot relative to the stance foot, m.
+    pub other_foot_xz_m: [f64; 2],
+}
+
+impl Geometry<'_> {
+    fn config(&self, pose: TorsoPose, leg_q: &[f64; LEG_SLOTS]) -> [f64; MAX_DOF] {
+        let mut q = *self.q_template;
+        q[0] = pose[0];
+        q[1] = pose[1];
+        q[2] = pose[2];
+        for k in 0..LEG_SLOTS {
+            q[self.leg_coord[k]] = leg_q[k];
+        }
+        q
+    }
+
+    /// Torso pose and rate relative to the `stance` foot, and where the other foot is, from the
+    /// torso pitch and rate (the estimator's) and the leg joints. `None` if the kinematics fail.
+    pub fn measure(
+        &self,
+        stance: Side,
+        pitch_rad: f64,
+        pitch_rate_rad_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+    ) -> Option<Measured> {
+        let q = self.config([0.0, 0.0, pitch_rad], leg_q);
+        let mut dq = [0.0; MAX_DOF];
+        dq[2] = pitch_rate_rad_s;
+        for k in 0..LEG_SLOTS {
+            dq[self.leg_coord[k]] = leg_dq[k];
+        }
+        let st = self
+            .model
+            .body_states(&q[..self.dof], &dq[..self.dof])
+            .ok()?;
+        let foot = self.legs.side(stance).foot;
+        let other = self.legs.side(stance.other()).foot;
+        let p = self.model.frame_position_in(&st, foot);
+        let v = self.model.frame_velocity_in(&st, foot);
+        let o = self.model.frame_position_in(&st, other);
+        // The torso origin is at 0 with zero velocity in this computation; the real stance foot
+        // is still, so the torso moves at minus the computed foot velocity.
+        Some(Measured {
+            pose: [-p[0], -p[1], pitch_rad],
+            rate: [-v[0], -v[1], pitch_rate_rad_s],
+            other_foot_xz_m: [o[0] - p[0], o[1] - p[1]],
+        })
+    }
+
+    /// The leg joint angles that put the `stance` foot at the origin and the other foot at
+    /// `other_foot_xz_m` with the torso at `pose`, and the joint rates that keep both feet
+    /// still while the torso moves at `rate`. Damped Newton from `warm`, which picks the knee
+    /// branch: the knees keep the sign they have there, at least [`MIN_KNEE_RAD`] from straight.
+    /// A pose slightly out of reach gets the closest reachable one (each foot within
+    /// [`REACH_TOLERANCE_M`]); `None` beyond that.
+    pub fn solve(
+        &self,
+        stance: Side,
+        pose: TorsoPose,
+        rate: TorsoPose,
+        other_foot_xz_m: [f64; 2],
+        warm: &[f64; LEG_SLOTS],
+    ) -> Option<([f64; LEG_SLOTS], [f64; LEG_SLOTS])> {
+        let mut leg_q = *warm;
+        let targets = [(stance, [0.0, 0.0]), (stance.other(), other_foot_xz_m)];
+        let mut worst = f64::INFINITY;
+        for _ in 0..16 {
+            let q = self.config(pose, &leg_q);
+            let st = self.model.body_poses(&q[..self.dof]).ok()?;
+            worst = 0.0_f64;
+            for (side, target) in targets {
+                let frame = self.legs.side(side).foot;
+                let p = self.model.frame_position_in(&st, frame);
+                let r = [target[0] - p[0], target[1] - p[1]];
+                worst = worst.max(r[0].abs()).max(r[1].abs());
+                let [hip, knee] = slots(side);
+                let jac = self.leg_jacobian(&st, frame, hip, knee);
+                // Levenberg–Marquardt: (JᵀJ + λI) d = Jᵀ r, λ tiny next to a bent knee's JᵀJ.
+                let mut jtj = [[0.0; 2]; 2];
+                let mut jtr = [0.0; 2];
+                for a in 0..2 {
+                    jtr[a] = jac[0][a] * r[0] + jac[1][a] * r[1];
+                    for b in 0..2 {
+                        jtj[a][b] = jac[0][a] * jac[0][b] + jac[1][a] * jac[1][b];
+                    }
+                }
+                jtj[0][0] += LM_DAMPING_M2;
+                jtj[1][1] += LM_DAMPING_M2;
+                let d = solve2(jtj, jtr)?;
+                leg_q[hip] += d[0];
+                let bend = warm[knee].signum();
+                leg_q[knee] = bend * (bend * (leg_q[knee] + d[1])).max(MIN_KNEE_RAD);
+            }
+            if worst < 1e-10 {
+                break;
+            }
+        }
+        if worst > REACH_TOLERANCE_M || leg_q.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        // Rates: J_torso·rate + J_leg·q̇_leg = 0 at each foot.
+        let q = self.config(pose, &leg_q);
+        let mut dq = [0.0; MAX_DOF];
+        dq[..3].copy_from_slice(&rate);
+        let st = self
+            .model
+            .body_states(&q[..self.dof], &dq[..self.dof])
+            .ok()?;
+        let mut leg_dq = [0.0; LEG_SLOTS];
+        for side in [Side::Left, Side::Right] {
+            let frame = self.legs.side(side).foot;
+            let v = self.model.frame_velocity_in(&st, frame);
+            let [hip, knee] = slots(side);
+            let d = solve2(self.leg_jacobian(&st, frame, hip, knee), [-v[0], -v[1]])?;
+            leg_dq[hip] = d[0];
+            leg_dq[knee] = d[1];
+        }
+        Some((leg_q, leg_dq))
+    }
+
+    /// The stance-leg angle θ of `stance` (see [`model::phase`]) with the torso at `pose`.
+    pub fn stance_leg_angle(
+        &self,
+        stance: Side,
+        pose: TorsoPose,
+        leg_q: &[f64; LEG_SLOTS],
+    ) -> Option<f64> {
+        let q = self.config(pose, leg_q);
+        self.model
+            .stance_leg_angle(&q[..self.dof], self.legs, stance)
+            .ok()
+    }
+
+    /// ∂(foot position)/∂(hip, knee) of one leg: a 2 × 2 matrix, rows x and z.
+    fn leg_jacobian(
+        &self,
+        st: &model::kinematics::BodyStates<f64>,
+        frame: usize,
+        hip: usize,
+        knee: usize,
+    ) -> [[f64; 2]; 2] {
+        let f = &self.model.frames[frame];
+        let p = self.model.frame_position_in(st, frame);
+        let (ch, ck) = (self.leg_coord[hip], self.leg_coord[knee]);
+        let mut jac = [[0.0; 2]; 2];
+        self.model
+            .point_jacobian_into(st, f.body, p, |row, col, v| {
+                if col == ch {
+                    jac[row][0] = v;
+                } else if col == ck {
+                    jac[row][1] = v;
+                }
+            });
+        jac
+    }
+}
+
+/// Knees stay at least this far from straight, rad (a straight knee is a singular leg).
+pub const MIN_KNEE_RAD: f64 = 0.05;
+
+/// How far a foot may stay from its target when the pose is out of reach, m.
+pub const REACH_TOLERANCE_M: f64 = 0.01;
+
+/// Levenberg–Marquardt damping, m² (a leg's JᵀJ is ~0.01–0.1 m² when bent).
+const LM_DAMPING_M2: f64 = 1e-6;
+
+/// Solves the 2 × 2 system `a·x = b`; `None` if `a` is (nearly) singular (a straight knee).
+fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> Option<[f64; 2]> {
+    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+    let scale = a.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+    // Also refuses NaN.
+    if det.abs().partial_cmp(&(1e-9 * scale * scale)) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    Some([
+        (b[0] * a[1][1] - b[1] * a[0][1]) / det,
+        (a[0][0] * b[1] - a[1][0] * b[0]) / det,
+    ])
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::config::LEG_JOINT_NAMES;
+    use crate::Setup;
+
+    #[test]
+    fn inverse_kinematics_puts_both_feet_where_asked_and_keeps_them_still() {
+        let setup = Setup::shipped().unwrap();
+        let model = &setup.model;
+        let legs = model.legs().unwrap();
+        let dof = model.dof();
+        let nominal = model.nominal_pose().unwrap();
+        let q0 = model
+            .with_design(
+                &nominal,
+                setup.gait.design.thigh_length_m,
+                setup.gait.design.shin_length_m,
+            )
+            .unwrap();
+        let mut q_template = [0.0; MAX_DOF];
+        q_template[..dof].copy_from_slice(&q0);
+        let mut leg_coord = [0; LEG_SLOTS];
+        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
+            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
+        }
+        let g = Geometry {
+            model,
+            legs: &legs,
+            dof,
+            q_template: &q_template,
+            leg_coord: &leg_coord,
+        };
+        // A bent-knee start; stance Right at the origin, the left foot 0.3 m behind.
+        let warm = [0.2, 0.3, 0.2, 0.3];
+        let pose = [-0.15, 0.64, 0.05];
+        let rate = [0.3, -0.1, 0.4];
+        let other = [-0.3, 0.0];
+        let (leg_q, leg_dq) = g.solve(Side::Right, pose, rate, other, &warm).unwrap();
+        // Forward kinematics: both feet where asked (to the Newton tolerance).
+        let m = g
+            .measure(Side::Right, pose[2], rate[2], &leg_q, &leg_dq)
+            .unwrap();
+        for k in 0..2 {
+            assert!(
+                (m.pose[k] - pose[k]).abs() < 1e-9,
+                "{:?} vs {pose:?}",
+                m.pose
+            );
+            assert!((m.other_foot_xz_m[k] - other[k]).abs() < 1e-9, "{m:?}");
+            // The rates keep both feet still: measuring them back gives the torso rate.
+            assert!(
+                (m.rate[k] - rate[k]).abs() < 1e-9,
+                "{:?} vs {rate:?}",
+                m.rate
+            );
+        }
+        // The knees stayed on their branch.
+        assert!(
+            leg_q[1] > MIN_KNEE_RAD && leg_q[3] > MIN_KNEE_RAD,
+            "{leg_q:?}"
+        );
+        // Out of reach (feet 1.5 m apart with 0.7 m legs): refused.
+        assert!(g
+            .solve(Side::Right, pose, rate, [-1.5, 0.0], &warm)
+            .is_none());
+    }
+
+    #[test]
+    fn solve2_refuses_a_singular_matrix() {
+        assert_eq!(
+            solve2([[2.0, 0.0], [0.0, 4.0]], [2.0, 2.0]),
+            Some([1.0, 0.5])
+        );
+        assert_eq!(solve2([[1.0, 2.0], [2.0, 4.0]], [1.0, 1.0]), None);
+    }
+}
