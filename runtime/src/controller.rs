@@ -1762,6 +1762,29 @@ mod tests {
     }
 
     #[test]
+    fn a_braking_step_out_of_the_legs_reach_is_refused_by_name() {
+        let setup = Setup::shipped().unwrap();
+        let mut config = setup.config.clone();
+        // Legs of 0.7 m cannot straddle 1.6 m.
+        config.walk.stop_step_length_m = 1.6;
+        let err = Controller::new(&config, &setup.gait, setup.model.clone(), false)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("walk.stop_step_length_m") && err.contains("1.6"),
+            "{err}"
+        );
+        // The shipped length is reachable and lengthens the swing: the braking pose's θ lies
+        // beyond the gait's θ⁻.
+        let c = Controller::new(&setup.config, &setup.gait, setup.model.clone(), false).unwrap();
+        assert!(
+            c.lunge.theta_rad > c.gait.theta_minus_rad + 0.05,
+            "{:?}",
+            c.lunge
+        );
+    }
+
+    #[test]
     fn min_jerk_is_smooth_and_peaks_at_1_875() {
         assert_eq!(min_jerk(0.0), (0.0, 0.0));
         assert_eq!(min_jerk(1.0).0, 1.0);
