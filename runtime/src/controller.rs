@@ -11,6 +11,7 @@
 //! Walk/Stop: q = [0, 0, θ̂, legs…] → θ(q), θ̇ (model::phase) → τ, τ̇ → y^d(τ), ẏ^d = y^d'(τ)·τ̇
 //!            swing-foot height + τ ≥ τ_switch, debounced → stance switch (relabel outputs)
 //! Ramp: minimum-jerk move from the measured pose to y^d(0); Stand: hold y^d(0)
+//! Walk from Stand: 1 s launch in double support, then the first step blends into y^d(τ)
 //! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
 //!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles
 //!   ▼
@@ -21,6 +22,15 @@
 //! Motor slots: 0..4 are the leg joints (left hip, left knee, right hip, right knee); 4..14 the
 //! held joints of the config, in order. Slots without a motor (fewer held joints, or held
 //! motors absent in simulation) have `present == false` in the [`SlotLayout`].
+//!
+//! # Walk from Stand: a launch
+//! At rest in double support the state-based phase has no momentum to run on. On Walk the
+//! controller first carries the torso forward with both feet down (1 s: a quintic from rest
+//! to 4 cm behind the stance foot, arriving at 0.2 m/s;
+//! joint targets by `double_support` inverse kinematics, gravity fed forward, PI feedback on
+//! the measured torso pose), then lifts the rear foot: the first step starts at the measured
+//! phase, its outputs blending (minimum jerk) from the launch's end pose into y^d(τ). From
+//! there the gait's stable orbit takes over (`runtime/tests/stand_sim.rs`).
 //!
 //! # Stop: why a braking step
 //! The gait lands each step with the torso moving at ~0.40 m/s. With point feet, double support
@@ -37,7 +47,7 @@
 //! (`runtime/tests/stop_sim.rs`).
 
 use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
-use crate::double_support::{Geometry, TorsoPose};
+use crate::double_support::{self, Geometry, TorsoPose};
 use crate::estimator::{EstimatorParams, PitchEstimator};
 use crate::io::ImuSample;
 use crate::safety::{SafetyInput, SafetyMonitor, Trip};
@@ -551,12 +561,58 @@ const PLANNED_PITCH_SIGMA_RAD: f64 = 0.002;
 /// The braking step follows the gait up to this phase, then blends into its touchdown pose.
 const BRAKE_BLEND_FROM: f64 = 0.3;
 
+/// A launch carries the torso to this far behind the stance foot, m: the robot then needs
+/// little speed to pass over it (README: the range that walked while tuning).
+const LAUNCH_BEHIND_M: f64 = 0.04;
+/// ... arriving at this forward speed, m/s.
+const LAUNCH_SPEED_MPS: f64 = 0.2;
+/// ... in this long, s.
+const LAUNCH_DURATION_S: f64 = 1.0;
+/// ... with the torso no higher than keeps the rear leg within this fraction of its reach.
+const LAUNCH_REACH_FRACTION: f64 = 0.995;
+/// Gains of the launch's torso pose feedback: proportional, and integral (1/s).
+const LAUNCH_POSE_KP: f64 = 0.9;
+const LAUNCH_POSE_KI_PER_S: f64 = 3.0;
+/// After a launch, the first step's outputs blend into the gait's over this much phase...
+const START_BLEND_SPAN: f64 = 0.3;
+/// ... and the swing knee's over this much.
+const START_KNEE_BLEND_SPAN: f64 = 0.2;
+
 /// Stand starts this long after the braking step's touchdown, s: the motor replies then
 /// report the post-impact pose.
 const STAND_DELAY_S: f64 = 0.005;
 
 /// Peak of ds/du of [`min_jerk`].
 const MIN_JERK_PEAK_RATE: f64 = 1.875;
+
+/// The start of a walk from Stand: both feet down, the torso carried forward over the stance
+/// foot (a quintic in time, joint targets by inverse kinematics, gravity fed forward), then the
+/// rear foot lifts.
+#[derive(Clone, Copy, Debug)]
+struct Launch {
+    start_t_s: f64,
+    duration_s: f64,
+    from: TorsoPose,
+    to: TorsoPose,
+    /// Torso speed at the end, m/s (forward).
+    to_speed_mps: f64,
+    /// The rear foot relative to the stance foot, m.
+    other_foot_xz_m: [f64; 2],
+    /// The last joint solution (the next tick's Newton start), model rad.
+    leg_q: [f64; LEG_SLOTS],
+    /// Integral of the torso pose error (joint targets aim past the plan by this), and when it
+    /// was last updated.
+    correction: TorsoPose,
+    last_t_s: f64,
+}
+
+/// After a launch, the first step's outputs start from the launch's end pose and blend into
+/// the gait's: y = y^d(τ) + (1 − b(τ))·offset, b a minimum-jerk ramp from `from_phase`.
+#[derive(Clone, Copy, Debug)]
+struct StartBlend {
+    from_phase: f64,
+    offset: [f64; OUTPUTS],
+}
 
 /// The braking step of a Stop: a longer step whose touchdown leaves the walking speed inside
 /// what double support can absorb (see [`Controller::lunge_pose`]).
@@ -632,6 +688,12 @@ pub struct Controller {
     lunge: Lunge,
     /// The current step is the braking step.
     braking: bool,
+    /// Walk was asked for in Stand: the launch starts at this tick.
+    launch_requested: bool,
+    launch: Option<Launch>,
+    start_blend: Option<StartBlend>,
+    /// Longest hip-to-foot distance the legs reach (thigh + shin), m.
+    leg_reach_m: f64,
     trip: Option<Trip>,
     motors: [MotorSample; SLOTS],
     last_imu_t_s: Option<f64>,
@@ -752,6 +814,10 @@ impl Controller {
             stop_touchdown_t_s: None,
             lunge,
             braking: false,
+            launch_requested: false,
+            launch: None,
+            start_blend: None,
+            leg_reach_m: gait.design.thigh_length_m + gait.design.shin_length_m,
             trip: None,
             motors: [MotorSample::default(); SLOTS],
             last_imu_t_s: None,
@@ -875,6 +941,7 @@ impl Controller {
                 self.step_start_t_s = t_s;
                 self.touchdown_ticks = 0;
                 self.steps = 0;
+                self.launch_requested = true;
                 self.enter(S::Walk, status);
             }
             (OperatorCommand::Stop, S::Walk) => {
@@ -991,6 +1058,38 @@ impl Controller {
                 }
             }
             ControlState::Stand => self.stand_commands(&mut out.commands),
+            ControlState::Walk if self.launch_requested || self.launch.is_some() => {
+                if self.launch_requested {
+                    self.launch_requested = false;
+                    self.begin_launch(t, &leg_q, &leg_dq);
+                }
+                if self.launch.is_some_and(|l| t - l.start_t_s < l.duration_s) {
+                    self.launch_commands(t, &mut out.commands);
+                    // The phase is reported (the stance-leg angle), not yet used.
+                    let eval = self.walk_references(t, &leg_q, &leg_dq);
+                    (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
+                } else {
+                    let eval = self.walk_references(t, &leg_q, &leg_dq);
+                    let stance = side_index(self.stance);
+                    let mut offset = [0.0; OUTPUTS];
+                    for (i, o) in offset.iter_mut().enumerate() {
+                        *o = leg_q[self.gait.out_slot[stance][i]] - eval.y[i];
+                    }
+                    self.start_blend = Some(StartBlend {
+                        from_phase: eval.phase.clamp(0.0, 1.0),
+                        offset,
+                    });
+                    // The first step starts now (the step timeout and a time-based phase
+                    // count from here).
+                    self.step_start_t_s = t;
+                    self.launch = None;
+                    self.last_foot = None;
+                    let eval = self.walk_references(t, &leg_q, &leg_dq);
+                    (y_des, dy_des) = (eval.y, eval.dy);
+                    (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
+                    self.walk_commands(&eval, &mut out.commands);
+                }
+            }
             ControlState::Walk | ControlState::Stop => {
                 let mut eval = self.walk_references(t, &leg_q, &leg_dq);
                 self.observe_phase(t, &mut eval);
@@ -1030,6 +1129,7 @@ impl Controller {
                     }
                     // Impact: relabel the legs and start the next step.
                     self.stance = self.stance.other();
+                    self.start_blend = None;
                     self.step_start_t_s = t;
                     self.touchdown_ticks = 0;
                     self.last_foot = None;
@@ -1132,6 +1232,114 @@ impl Controller {
                 }
             }
         }
+    }
+
+    /// The kinematics of double support on this robot.
+    fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            model: &self.model,
+            legs: &self.legs,
+            dof: self.dof,
+            q_template: &self.q_template,
+            leg_coord: &self.leg_coord,
+        }
+    }
+
+    /// Starts a launch from the measured double-support pose at rest: the torso moves forward
+    /// to [`LAUNCH_BEHIND_M`] behind the stance foot, no higher than keeps the rear leg within
+    /// [`LAUNCH_REACH_FRACTION`] of its reach, arriving at [`LAUNCH_SPEED_MPS`].
+    fn begin_launch(&mut self, t_s: f64, leg_q: &[f64; LEG_SLOTS], leg_dq: &[f64; LEG_SLOTS]) {
+        let measured = self.geometry().measure(
+            self.stance,
+            self.estimator.pitch_rad(),
+            self.estimator.pitch_rate_rad_s(),
+            leg_q,
+            leg_dq,
+        );
+        self.launch = measured.map(|m| {
+            let x = -LAUNCH_BEHIND_M;
+            let reach = LAUNCH_REACH_FRACTION * self.leg_reach_m;
+            let dx = x - m.other_foot_xz_m[0];
+            let z = m.pose[1].min((reach * reach - dx * dx).max(0.0).sqrt());
+            Launch {
+                start_t_s: t_s,
+                duration_s: LAUNCH_DURATION_S,
+                from: m.pose,
+                to: [x, z, m.pose[2]],
+                to_speed_mps: LAUNCH_SPEED_MPS,
+                other_foot_xz_m: m.other_foot_xz_m,
+                leg_q: *leg_q,
+                correction: [0.0; 3],
+                last_t_s: t_s,
+            }
+        });
+    }
+
+    /// The launch's joint targets at `t_s`: both feet held, the torso on its quintic (pitch
+    /// and height held), gravity fed forward.
+    fn launch_commands(&mut self, t_s: f64, commands: &mut [JointCommand; SLOTS]) {
+        let Some(mut launch) = self.launch else {
+            return;
+        };
+        let dt = t_s - launch.start_t_s;
+        let mut pose = [0.0; 3];
+        let mut rate = [0.0; 3];
+        let end_rate = [launch.to_speed_mps, 0.0, 0.0];
+        for k in 0..3 {
+            (pose[k], rate[k]) = double_support::quintic(
+                launch.from[k],
+                0.0,
+                launch.to[k],
+                end_rate[k],
+                launch.duration_s,
+                dt,
+            );
+        }
+        let geometry = self.geometry();
+        // Pose feedback (PI): the joints' compliance lets the torso sag off its plan (4° of
+        // pitch over the launch without it); the joint targets aim past the plan by the
+        // error. The proportional gain stays below 1: stable even if the joints followed their
+        // targets within a tick.
+        let h = (t_s - launch.last_t_s).clamp(0.0, 0.1);
+        launch.last_t_s = t_s;
+        let mut lq = [0.0; LEG_SLOTS];
+        let mut ldq = [0.0; LEG_SLOTS];
+        for k in 0..LEG_SLOTS {
+            lq[k] = self.to_model(k, self.motors[k].q_rad);
+            ldq[k] = self.layout.direction[k] * self.motors[k].dq_rad_s;
+        }
+        let pitch = self.estimator.pitch_rad();
+        let pitch_rate = self.estimator.pitch_rate_rad_s();
+        let mut error = [0.0; 3];
+        if let Some(m) = geometry.measure(self.stance, pitch, pitch_rate, &lq, &ldq) {
+            for k in 0..3 {
+                error[k] = pose[k] - m.pose[k];
+                launch.correction[k] += LAUNCH_POSE_KI_PER_S * h * error[k];
+            }
+        }
+        let mut pose_cmd = pose;
+        for k in 0..3 {
+            pose_cmd[k] += launch.correction[k] + error[k] * LAUNCH_POSE_KP;
+        }
+        let solved = geometry.solve(
+            self.stance,
+            pose_cmd,
+            rate,
+            launch.other_foot_xz_m,
+            &launch.leg_q,
+        );
+        // Out of reach (not on a launch within LAUNCH_REACH_FRACTION): hold the last solution.
+        let (leg_q, leg_dq) = solved.unwrap_or((launch.leg_q, [0.0; LEG_SLOTS]));
+        let ff = geometry
+            .gravity_torques(self.stance, pose, &leg_q)
+            .unwrap_or([0.0; LEG_SLOTS]);
+        launch.leg_q = leg_q;
+        self.launch = Some(launch);
+        for k in 0..LEG_SLOTS {
+            let dir = self.layout.direction[k];
+            commands[k] = self.pd(k, self.to_motor(k, leg_q[k]), dir * leg_dq[k], dir * ff[k]);
+        }
+        self.hold_commands(commands);
     }
 
     /// PD command for a slot with the slot's gains (leg gains or held gains).
@@ -1251,6 +1459,26 @@ impl Controller {
             y[i] = v;
             // Outside [0, 1] the reference is held at its end value: no velocity.
             dy[i] = if inside { d * rate } else { 0.0 };
+        }
+        // The first step after a launch: from the launch's end pose into the gait's outputs.
+        if let Some(blend) = self.start_blend {
+            for i in 0..OUTPUTS {
+                // The swing knee bends sooner (the foot clears the ground), then the rest.
+                let span = if i == 3 {
+                    START_KNEE_BLEND_SPAN
+                } else {
+                    START_BLEND_SPAN
+                };
+                let u = (s - blend.from_phase) / span;
+                let (b, db_du) = min_jerk(u);
+                let db = if inside && u > 0.0 && u < 1.0 {
+                    db_du / span * rate
+                } else {
+                    0.0
+                };
+                y[i] += (1.0 - b) * blend.offset[i];
+                dy[i] -= db * blend.offset[i];
+            }
         }
         // The braking step: the gait's outputs, stretched over the longer stance-leg swing,
         // blend into the braking touchdown pose over the second part of the step.
@@ -1475,12 +1703,19 @@ mod tests {
         for k in 0..LEG_SLOTS {
             assert!((h.input.motors[k].q_rad - first[k]).abs() < 1e-9);
         }
-        // Walk: time-based phase, a stance switch every step duration (+ debounce).
+        // Walk: first the launch (both feet down, the torso carried forward), then a stance
+        // switch every step duration (+ debounce, time-based phase from the lift-off).
         let stance0 = h.c.stance();
         assert_eq!(
             h.step(Some(OperatorCommand::Walk)).state,
             ControlState::Walk
         );
+        assert!(h.c.launch.is_some());
+        let s = h.run(LAUNCH_DURATION_S - 0.002);
+        assert_eq!((s.state, s.stance), (ControlState::Walk, stance0));
+        assert!(h.c.launch.is_some());
+        h.run(0.003);
+        assert!(h.c.launch.is_none() && h.c.start_blend.is_some());
         let step_s = Setup::shipped().unwrap().gait.step_duration_s;
         let mut switches = Vec::new();
         let mut prev = stance0;
@@ -1576,9 +1811,15 @@ mod tests {
         let mut h = Harness::new(PhaseSource::TimeBased);
         h.go_stand();
         h.step(Some(OperatorCommand::Walk));
-        let s = h.run(0.3);
-        let tau = s.phase;
+        // The launch, then the first step (which blends from the launch's pose): from the
+        // second step on, the outputs are the gait's.
         let setup = Setup::shipped().unwrap();
+        h.run(LAUNCH_DURATION_S + setup.gait.step_duration_s + 0.01);
+        assert_eq!(h.c.stance(), Side::Left);
+        assert!(h.c.start_blend.is_none());
+        let t0 = h.c.step_start_t_s;
+        let s = h.run(t0 + 0.3 - h.input.t_s);
+        let tau = s.phase;
         assert!(
             (tau - 0.3 / setup.gait.step_duration_s).abs() < 3e-3,
             "{tau}"
@@ -1591,15 +1832,15 @@ mod tests {
             let dy = bezier::eval_d1(a, ahead) / setup.gait.step_duration_s;
             assert!((s.dy_des_rad_s[i] - dy).abs() < 1e-9);
         }
-        // The gait's stance leg is right: stance hip is slot 2.
-        assert_eq!(s.stance, Side::Right);
-        assert_eq!(h.out.commands[2].q_des_rad, s.y_des_rad[0]);
-        assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[2]);
-        // After the switch the left leg stands: stance hip is slot 0.
-        let s = h.run(setup.gait.step_duration_s - 0.3 + 0.1);
+        // The left leg stands: stance hip is slot 0.
         assert_eq!(s.stance, Side::Left);
         assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[0]);
         assert_eq!(h.out.commands[3].q_des_rad, s.y_des_rad[3]);
+        // After the switch the right leg stands: stance hip is slot 2.
+        let s = h.run(setup.gait.step_duration_s - 0.3 + 0.1);
+        assert_eq!(s.stance, Side::Right);
+        assert_eq!(h.out.commands[2].q_des_rad, s.y_des_rad[0]);
+        assert_eq!(h.out.commands[0].q_des_rad, s.y_des_rad[2]);
     }
 
     #[test]

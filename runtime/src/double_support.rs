@@ -179,6 +179,63 @@ impl Geometry<'_> {
             .ok()
     }
 
+    /// Leg joint torques that hold the robot still in double support at (`pose`, `leg_q`)
+    /// against gravity, N·m (model direction, by leg slot): the torques of the smallest contact
+    /// forces that balance the torso's three equations. `None` if the kinematics fail.
+    pub fn gravity_torques(
+        &self,
+        stance: Side,
+        pose: TorsoPose,
+        leg_q: &[f64; LEG_SLOTS],
+    ) -> Option<[f64; LEG_SLOTS]> {
+        let q = self.config(pose, leg_q);
+        let st = self.model.body_poses(&q[..self.dof]).ok()?;
+        let mut g = [0.0; MAX_DOF];
+        for (b, body) in self.model.bodies.iter().enumerate() {
+            let m = body.inertia.mass_kg;
+            if m == 0.0 {
+                continue;
+            }
+            let com = self.model.point_position(&st, b, body.inertia.com_xz_m);
+            let w = m * self.model.gravity_mps2;
+            self.model.point_jacobian_into(&st, b, com, |row, col, v| {
+                if row == 1 {
+                    g[col] += v * w;
+                }
+            });
+        }
+        let mut jb = [[0.0; 3]; 4];
+        let mut jl = [[0.0; LEG_SLOTS]; 4];
+        for (f, side) in [stance, stance.other()].into_iter().enumerate() {
+            let frame = self.legs.side(side).foot;
+            let p = self.model.frame_position_in(&st, frame);
+            let body = self.model.frames[frame].body;
+            self.model.point_jacobian_into(&st, body, p, |row, col, v| {
+                if col < 3 {
+                    jb[2 * f + row][col] = v;
+                } else if let Some(k) = self.leg_coord.iter().position(|&c| c == col) {
+                    jl[2 * f + row][k] = v;
+                }
+            });
+        }
+        let mut a = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for k in 0..3 {
+                a[i][k] = (0..4).map(|r| jb[r][i] * jb[r][k]).sum();
+            }
+        }
+        let y = solve3(a, [g[0], g[1], g[2]])?;
+        let mut lambda = [0.0; 4];
+        for (r, l) in lambda.iter_mut().enumerate() {
+            *l = (0..3).map(|i| jb[r][i] * y[i]).sum();
+        }
+        let mut u = [0.0; LEG_SLOTS];
+        for (k, uk) in u.iter_mut().enumerate() {
+            *uk = g[self.leg_coord[k]] - (0..4).map(|r| jl[r][k] * lambda[r]).sum::<f64>();
+        }
+        Some(u)
+    }
+
     /// ∂(foot position)/∂(hip, knee) of one leg: a 2 × 2 matrix, rows x and z.
     fn leg_jacobian(
         &self,
@@ -211,6 +268,47 @@ pub const REACH_TOLERANCE_M: f64 = 0.01;
 
 /// Levenberg–Marquardt damping, m² (a leg's JᵀJ is ~0.01–0.1 m² when bent).
 const LM_DAMPING_M2: f64 = 1e-6;
+
+/// Solves the 3 × 3 system `a·x = b` by Cramer's rule; `None` if singular.
+fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let det3 = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let det = det3(a);
+    if det.abs().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let mut x = [0.0; 3];
+    for (c, xc) in x.iter_mut().enumerate() {
+        let mut m = a;
+        for r in 0..3 {
+            m[r][c] = b[r];
+        }
+        *xc = det3(m) / det;
+    }
+    Some(x)
+}
+
+/// A quintic from position `p0` and velocity `v0` (zero acceleration) to position `p1` and
+/// velocity `v1` (zero acceleration) over `duration_s`: position and velocity at `t_s`
+/// (clamped to the ends).
+pub fn quintic(p0: f64, v0: f64, p1: f64, v1: f64, duration_s: f64, t_s: f64) -> (f64, f64) {
+    if duration_s <= 0.0 {
+        return (p1, v1);
+    }
+    let big_t = duration_s;
+    let t = t_s.clamp(0.0, big_t);
+    let h = p1 - p0;
+    let t3 = big_t * big_t * big_t;
+    let c3 = (10.0 * h - (6.0 * v0 + 4.0 * v1) * big_t) / t3;
+    let c4 = (-15.0 * h + (8.0 * v0 + 7.0 * v1) * big_t) / (t3 * big_t);
+    let c5 = (6.0 * h - 3.0 * (v0 + v1) * big_t) / (t3 * big_t * big_t);
+    let p = p0 + t * (v0 + t * t * (c3 + t * (c4 + t * c5)));
+    let v = v0 + t * t * (3.0 * c3 + t * (4.0 * c4 + t * 5.0 * c5));
+    (p, v)
+}
 
 /// Solves the 2 × 2 system `a·x = b`; `None` if `a` is (nearly) singular (a straight knee).
 fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> Option<[f64; 2]> {

@@ -17,12 +17,13 @@
 //! Applying a fault allocates nothing (the schedule is built before the loop).
 //! [`soak`] walks for a long time under a profile: after each trip it lets the robot settle in
 //! Damping for [`SOAK_LINGER_S`], then resets: a fresh controller (Reset) on the robot re-placed
-//! in the gait's post-impact state, walking at once (Start → Walk: a robot at rest in Stand
-//! cannot start a step with the state-based phase, see below), and counts trips by reason.
+//! in the gait's post-impact state, walking at once, and counts trips by reason.
 //!
 //! The run starts in the gait's planned post-impact state (the robot already walking at the
-//! gait speed, its first stance foot just down), not from standing: Ramp and Stand end in a
-//! double-support pose at rest, from which the state-based phase cannot start a step.
+//! gait speed, its first stance foot just down), not from standing, so that every step of the
+//! run is on the gait's orbit. Starting from Stand works too (the controller's launch; see
+//! `runtime/tests/stand_sim.rs`): its first steps are quicker and converge to the orbit over
+//! some 20 steps.
 
 use crate::faults::{Fault, FaultProfile, ScheduledFault};
 use crate::io::Imu;

@@ -1,6 +1,6 @@
 //! `Controller::tick` allocates nothing: a counting global allocator watches this test
-//! thread over thousands of ticks through Ramp, Stand and Walk (both phase sources, stance
-//! switches included). No locks: by construction `Controller` owns only plain data (no `Mutex`,
+//! thread over thousands of ticks through Ramp, Stand, Walk (its launch in double support,
+//! both phase sources, stance switches included), Stop (the braking step) and Stand again. No locks: by construction `Controller` owns only plain data (no `Mutex`,
 //! `RwLock`, channel or `Arc` in `controller.rs`, `estimator.rs`, `safety.rs`);
 //! `controller_is_owned_plain_data` checks it is `'static + Clone + Send + Sync` (no borrowed
 //! shared state).
@@ -69,8 +69,9 @@ fn walk_without_allocating(phase: PhaseSource) {
     let pitch: f64 = 0.0237;
     let mut steps = 0;
     let mut walk_ticks = 0;
+    let mut stood_after_stop = false;
     let ((), allocations) = counted(|| {
-        for k in 0..6000u32 {
+        for k in 0..10_000u32 {
             for slot in 0..4 {
                 let cmd = out.commands[slot];
                 if cmd.mode == CommandMode::Pd {
@@ -88,11 +89,15 @@ fn walk_without_allocating(phase: PhaseSource) {
             input.operator = match k {
                 1 => Some(OperatorCommand::Start),
                 2500 => Some(OperatorCommand::Walk),
+                7000 => Some(OperatorCommand::Stop),
                 _ => None,
             };
             c.tick(&input, &mut out);
             if out.status.state == ControlState::Walk {
                 walk_ticks += 1;
+            }
+            if out.status.transition == Some((ControlState::Stop, ControlState::Stand)) {
+                stood_after_stop = true;
             }
             steps = out.status.steps;
         }
@@ -101,7 +106,10 @@ fn walk_without_allocating(phase: PhaseSource) {
     assert!(walk_ticks >= 3400, "{walk_ticks} ticks in Walk");
     if phase == PhaseSource::TimeBased {
         // Several stance switches (each relabels the legs) happen inside the counted ticks.
+        // The launch (1 s), several stance switches (each relabels the legs), the braking
+        // step and Stand happen inside the counted ticks.
         assert!(steps >= 3, "stance switches exercised: {steps}");
+        assert!(stood_after_stop);
     }
     assert_eq!(allocations, 0, "Controller::tick allocated");
 }
