@@ -394,6 +394,76 @@ mod tests {
     }
 
     #[test]
+    fn gravity_torques_hold_the_simulated_robot_still_in_double_support() {
+        use drivers::sim::{RobotSim, RobotSimConfig};
+        let setup = Setup::shipped().unwrap();
+        let model = &setup.model;
+        let legs = model.legs().unwrap();
+        let dof = model.dof();
+        let q0 = setup.gait.initial_state.clone().unwrap().q;
+        let mut q_template = [0.0; MAX_DOF];
+        q_template[..dof].copy_from_slice(&q0);
+        let mut leg_coord = [0; LEG_SLOTS];
+        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
+            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
+        }
+        let g = Geometry {
+            model,
+            legs: &legs,
+            dof,
+            q_template: &q_template,
+            leg_coord: &leg_coord,
+        };
+        // A crouched double-support pose: the right foot at the origin, the left 0.2 m behind.
+        let pose = [-0.08, 0.64, 0.03];
+        let (leg_q, _) = g
+            .solve(
+                Side::Right,
+                pose,
+                [0.0; 3],
+                [-0.2, 0.0],
+                &[0.2, 0.4, 0.2, 0.4],
+            )
+            .unwrap();
+        let u = g.gravity_torques(Side::Right, pose, &leg_q).unwrap();
+        let mut q = q0.clone();
+        q[..3].copy_from_slice(&pose);
+        for k in 0..LEG_SLOTS {
+            q[leg_coord[k]] = leg_q[k];
+        }
+        let actuated = model.actuated_joints();
+        let torques_for = |scale: f64| -> Vec<f64> {
+            actuated
+                .iter()
+                .map(|&j| {
+                    let c = model.joints[j].coordinate;
+                    leg_coord
+                        .iter()
+                        .position(|&lc| lc == c)
+                        .map_or(0.0, |k| scale * u[k])
+                })
+                .collect()
+        };
+        let speed_after = |torques: &[f64]| {
+            let config = RobotSimConfig {
+                belt_speed_mps: 0.0,
+                ..RobotSimConfig::default()
+            };
+            let mut sim = RobotSim::new(model, config).unwrap();
+            sim.set_state(&q, &vec![0.0; dof]).unwrap();
+            assert!(sim.in_stance(Side::Left) && sim.in_stance(Side::Right));
+            sim.step(torques, 0.05).unwrap();
+            sim.dq().iter().fold(0.0_f64, |m, v| m.max(v.abs()))
+        };
+        // Held: after 50 ms every coordinate moves slower than 1 mm/s (or mrad/s). Without the
+        // torques the robot folds (the check can fail).
+        let held = speed_after(&torques_for(1.0));
+        let limp = speed_after(&torques_for(0.0));
+        assert!(held < 1e-3, "held: {held}");
+        assert!(limp > 0.1, "limp: {limp}");
+    }
+
+    #[test]
     fn solve2_refuses_a_singular_matrix() {
         assert_eq!(
             solve2([[2.0, 0.0], [0.0, 4.0]], [2.0, 2.0]),
