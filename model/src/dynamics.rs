@@ -89,7 +89,8 @@ impl PlanarModel {
                 found: inertias.len(),
             });
         }
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let n = self.dof();
         let z = S::zero();
         let mut dmat = DMatrix::from_element(n, n, z);
@@ -236,7 +237,8 @@ impl PlanarModel {
                 found: ddq.len(),
             });
         }
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let n = self.dof();
         let z = S::zero();
         let g = S::from(self.gravity_mps2);
@@ -253,6 +255,9 @@ impl PlanarModel {
             }
         }
         let mut out = DVector::from_element(n, z);
+        // Reused by every body (only the first nc entries are read): initialising it once
+        // matters when S is a wide dual number.
+        let mut cols = [(0usize, z, z); crate::robot::MAX_DOF];
         for (b, inertia) in inertias.iter().enumerate() {
             if inertia.mass_kg.re() == 0.0 && inertia.inertia_yy_kgm2.re() == 0.0 {
                 continue;
@@ -261,7 +266,6 @@ impl PlanarModel {
             let bias = self.point_bias_acceleration(&st, b, inertia.com_xz_m);
             // a = J q̈ + J̇ q̇, then f = m (a + g ẑ); generalized force Jᵀ f + J_θᵀ I θ̈.
             let mut a = bias;
-            let mut cols = [(0usize, z, z); crate::robot::MAX_DOF];
             let mut nc = 0;
             self.point_jacobian_into(&st, b, com, |r, c, v| {
                 if let Some(e) = cols[..nc].iter_mut().find(|e| e.0 == c) {
@@ -296,7 +300,8 @@ impl PlanarModel {
 
     /// Kinetic energy ½ Σ (m |v_com|² + I ω²) from the velocity recursion (independent of D), J.
     pub fn kinetic_energy<S: Real>(&self, q: &[S], dq: &[S]) -> Result<S> {
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let mut t = S::zero();
         for (b, body) in self.bodies.iter().enumerate() {
             let i = lift::<S>(&body.inertia);
@@ -309,7 +314,8 @@ impl PlanarModel {
 
     /// Potential energy Σ m g z_com (zero at z = 0), J.
     pub fn potential_energy<S: Real>(&self, q: &[S]) -> Result<S> {
-        let st = self.body_poses(q)?;
+        let mut st = BodyStates::zeroed();
+        self.body_poses_into(q, &mut st)?;
         let mut v = S::zero();
         for (b, body) in self.bodies.iter().enumerate() {
             let com = self.body_com_in(&st, b);
@@ -320,7 +326,8 @@ impl PlanarModel {
 
     /// Angular momentum about the world point `p` (about +y), kg·m²/s.
     pub fn angular_momentum_about<S: Real>(&self, q: &[S], dq: &[S], p: [S; 2]) -> Result<S> {
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let mut l = S::zero();
         for (b, body) in self.bodies.iter().enumerate() {
             let i = lift::<S>(&body.inertia);
@@ -371,7 +378,8 @@ impl PlanarModel {
         let m = nc + design.len();
         let dy = self.dynamics(q, dq)?;
         let bu = self.generalized_forces(u)?;
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let mut a = DMatrix::from_element(n + m, n + m, S::zero());
         let mut rhs = DVector::from_element(n + m, S::zero());
         a.view_mut((0, 0), (n, n)).copy_from(&dy.mass_matrix);
@@ -427,7 +435,8 @@ impl PlanarModel {
         let design = self.design_joints();
         let m = 2 + design.len();
         let dy = self.dynamics_with(inertias, q, dq_minus)?;
-        let st = self.body_poses(q)?;
+        let mut st = BodyStates::zeroed();
+        self.body_poses_into(q, &mut st)?;
         let jac = self.frame_jacobian(&st, impact_frame);
         let mut a = DMatrix::from_element(n + m, n + m, S::zero());
         let mut rhs = DVector::from_element(n + m, S::zero());

@@ -65,6 +65,23 @@ pub struct BodyStates<S> {
     pub bias_acc_xz: [[S; 2]; MAX_BODIES],
 }
 
+impl<S: Real> BodyStates<S> {
+    /// All-zero states of no bodies, to be filled by [`PlanarModel::body_states_into`].
+    pub fn zeroed() -> Self {
+        let z = S::zero();
+        Self {
+            len: 0,
+            pose: [Pose {
+                xz_m: [z, z],
+                pitch_rad: z,
+            }; MAX_BODIES],
+            vel_xz: [[z, z]; MAX_BODIES],
+            omega: [z; MAX_BODIES],
+            bias_acc_xz: [[z, z]; MAX_BODIES],
+        }
+    }
+}
+
 impl PlanarModel {
     fn check_len(&self, what: &'static str, v: usize) -> Result<()> {
         if v != self.dof() {
@@ -79,25 +96,46 @@ impl PlanarModel {
 
     /// Poses of every body at q, with zero velocities. Never allocates.
     pub fn body_poses<S: Real>(&self, q: &[S]) -> Result<BodyStates<S>> {
+        let mut st = BodyStates::zeroed();
+        self.body_poses_into(q, &mut st)?;
+        Ok(st)
+    }
+
+    /// [`Self::body_poses`] written into `st`.
+    pub fn body_poses_into<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) -> Result<()> {
         let zeros = [S::zero(); MAX_DOF];
-        self.body_states(q, &zeros[..q.len().min(MAX_DOF)])
+        self.body_states_into(q, &zeros[..q.len().min(MAX_DOF)], st)
     }
 
     /// Poses, velocities and bias accelerations of every body at (q, q̇). Never allocates.
     pub fn body_states<S: Real>(&self, q: &[S], dq: &[S]) -> Result<BodyStates<S>> {
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
+        Ok(st)
+    }
+
+    /// [`Self::body_states`] written into `st` (any previous content is overwritten), so that a
+    /// caller evaluating with a wide dual-number type does not copy the states around.
+    pub fn body_states_into<S: Real>(
+        &self,
+        q: &[S],
+        dq: &[S],
+        st: &mut BodyStates<S>,
+    ) -> Result<()> {
         self.check_len("q", q.len())?;
         self.check_len("dq", dq.len())?;
         let z = S::zero();
-        let mut st = BodyStates {
-            len: self.bodies.len(),
-            pose: [Pose {
+        let n = self.bodies.len().min(MAX_BODIES);
+        st.len = self.bodies.len();
+        for b in 0..n {
+            st.pose[b] = Pose {
                 xz_m: [z, z],
                 pitch_rad: z,
-            }; MAX_BODIES],
-            vel_xz: [[z, z]; MAX_BODIES],
-            omega: [z; MAX_BODIES],
-            bias_acc_xz: [[z, z]; MAX_BODIES],
-        };
+            };
+            st.vel_xz[b] = [z, z];
+            st.omega[b] = z;
+            st.bias_acc_xz[b] = [z, z];
+        }
         st.pose[0] = Pose {
             xz_m: [q[0], q[1]],
             pitch_rad: q[2],
@@ -134,7 +172,7 @@ impl PlanarModel {
             st.omega[b] = omega;
             st.bias_acc_xz[b] = add(add(st.bias_acc_xz[p], scale(-(wp * wp), d)), extra_acc);
         }
-        Ok(st)
+        Ok(())
     }
 
     /// World position of a point given in the frame of `body`.

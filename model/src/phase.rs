@@ -22,7 +22,8 @@ impl PlanarModel {
 
     /// Stance-leg angle θ(q), rad. Never allocates.
     pub fn stance_leg_angle<S: Real>(&self, q: &[S], legs: &Legs, stance: Side) -> Result<S> {
-        let st = self.body_poses(q)?;
+        let mut st = BodyStates::zeroed();
+        self.body_poses_into(q, &mut st)?;
         Ok(self.stance_leg_angle_in(&st, legs, stance))
     }
 
@@ -34,7 +35,8 @@ impl PlanarModel {
         legs: &Legs,
         stance: Side,
     ) -> Result<(S, S)> {
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let leg = legs.side(stance);
         let hip_body = self.joints[leg.hip].body;
         let hip = st.pose[hip_body].xz_m;
@@ -70,7 +72,8 @@ impl PlanarModel {
         legs: &Legs,
         stance: Side,
     ) -> Result<AngleDerivatives<S>> {
-        let st = self.body_states(q, dq)?;
+        let mut st = BodyStates::zeroed();
+        self.body_states_into(q, dq, &mut st)?;
         let leg = legs.side(stance);
         let hip_body = self.joints[leg.hip].body;
         let foot = self.frame_position_in(&st, leg.foot);
@@ -104,7 +107,8 @@ impl PlanarModel {
 
     /// Height of the swing foot above the ground (z = 0), z_nsf(q), m. Never allocates.
     pub fn swing_foot_height<S: Real>(&self, q: &[S], legs: &Legs, swing: Side) -> Result<S> {
-        let st = self.body_poses(q)?;
+        let mut st = BodyStates::zeroed();
+        self.body_poses_into(q, &mut st)?;
         Ok(self.frame_position_in(&st, legs.side(swing).foot)[1])
     }
 }

@@ -22,8 +22,10 @@ use serde::{Deserialize, Serialize};
 
 /// Number of floating-base coordinates (x, z, pitch).
 pub const BASE_DOF: usize = 3;
-/// Largest number of bodies (non-fixed links) the allocation-free kinematics supports.
-pub const MAX_BODIES: usize = 32;
+/// Largest number of bodies (non-fixed links) the allocation-free kinematics supports. ADAM has
+/// 9 (with its design-joint bodies). Every per-body array is this long, and the planner's
+/// derivative evaluations move them around: a needlessly large capacity is paid in memory traffic.
+pub const MAX_BODIES: usize = 16;
 /// Largest number of coordinates the allocation-free kinematics supports.
 pub const MAX_DOF: usize = MAX_BODIES + BASE_DOF;
 

@@ -7,6 +7,7 @@
 
 use crate::{PlannerError, Result};
 use model::gait::OutputDefinition;
+use model::kinematics::BodyStates;
 use model::robot::{JointRole, Legs};
 use model::{PlanarModel, Real, Side};
 
@@ -148,7 +149,8 @@ impl PlanarBiped {
                 }
             }
         }
-        let st = self.model.body_states(&q, &dq)?;
+        let mut st = BodyStates::zeroed();
+        self.model.body_states_into(&q, &dq, &mut st)?;
         let foot = self.legs.side(self.stance).foot;
         let p = self.model.frame_position_in(&st, foot);
         let v = self.model.frame_velocity_in(&st, foot);
@@ -167,7 +169,8 @@ impl PlanarBiped {
 
     /// The stance-foot Jacobian's column `c` (x and z rows) at full q.
     pub fn stance_jacobian<S: Real>(&self, q: &[S]) -> Result<Vec<[S; 2]>> {
-        let st = self.model.body_poses(q)?;
+        let mut st = BodyStates::zeroed();
+        self.model.body_poses_into(q, &mut st)?;
         let foot = self.legs.side(self.stance).foot;
         let p = self.model.frame_position_in(&st, foot);
         let mut cols = vec![[S::zero(); 2]; self.model.dof()];

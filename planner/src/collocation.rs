@@ -31,15 +31,21 @@
 //! Each constraint group is a *block*: a generic function of a few variables. Jacobians come from
 //! forward-mode `Dual64` sweeps (one per block variable), Lagrangian Hessians from `HyperDual64`
 //! evaluations of Σ μ_r c_r (one per structurally non-zero variable pair). Structural zeros are
-//! found once per block kind at set-up by evaluating at a random point. The objective's
+//! found once per block kind at set-up by evaluating at a random point. In the solve loop the
+//! sweeps run four at a time ([`crate::nlp::lanes`]: `Dual<Lanes<4>>`, `HyperDual<Lanes<4>>`,
+//! bit for bit the scalar results) and the blocks are spread over the rayon pool when the
+//! caller is not already on it; contributions to shared Hessian entries are added in block
+//! order, so the values never depend on the schedule. The objective's
 //! derivatives are hand-derived and checked against finite differences in the tests.
 //! Acceleration and torque variables are scaled by 1/10 (PLANNER-NOTES: 219 → 78 iterations).
 
 use crate::biped::PlanarBiped;
 use crate::config::PlannerConfig;
+use crate::nlp::lanes::Lanes;
 use crate::nlp::{DomainError, NlpProblem, SparsityPattern};
 use model::bezier;
-use model::num_dual::{Dual64, HyperDual64};
+use model::kinematics::BodyStates;
+use model::num_dual::{Dual, Dual64, HyperDual, HyperDual64};
 use model::Real;
 use std::collections::HashMap;
 
@@ -47,6 +53,11 @@ use std::collections::HashMap;
 pub const ACC_SCALE: f64 = 10.0;
 /// u = `TORQUE_SCALE` × its variable.
 pub const TORQUE_SCALE: f64 = 10.0;
+
+/// Seeds (Jacobian columns or Hessian pairs) differentiated together in one block evaluation
+/// ([`Lanes`]): bit for bit the one-seed-per-evaluation results, with the kinematics and the
+/// bookkeeping of an evaluation shared by this many seeds.
+const SEED_LANES: usize = 4;
 
 /// Where each variable lives in x.
 #[derive(Clone, Debug)]
@@ -797,7 +808,10 @@ impl HzdProblem {
                 let [q, dq, _] = bp
                     .full_state_design(&z[..nq], dqr, &zero, design)
                     .map_err(|_| DomainError)?;
-                let st = bp.model.body_states(&q, &dq).map_err(|_| DomainError)?;
+                let mut st = BodyStates::zeroed();
+                bp.model
+                    .body_states_into(&q, &dq, &mut st)
+                    .map_err(|_| DomainError)?;
                 let foot = bp.legs.side(bp.swing()).foot;
                 let p = bp.model.frame_position_in(&st, foot);
                 if kind == Kind::SwingHeight {
@@ -830,9 +844,9 @@ impl HzdProblem {
                 out[2 * nq] = lam[1];
                 out[2 * nq + 1] = lam[1] * mu - lam[0];
                 out[2 * nq + 2] = lam[1] * mu + lam[0];
-                let st = bp
-                    .model
-                    .body_states(&q, &dq_plus)
+                let mut st = BodyStates::zeroed();
+                bp.model
+                    .body_states_into(&q, &dq_plus, &mut st)
                     .map_err(|_| DomainError)?;
                 let v = bp
                     .model
@@ -994,6 +1008,89 @@ impl HzdProblem {
         out
     }
 
+    /// `f` of every block, in block order: on the rayon pool when called outside it (one plan:
+    /// both cores evaluate), sequentially inside it (a co-design sweep already keeps every
+    /// core busy with whole runs). Results do not depend on which.
+    fn map_blocks<T: Send>(&self, f: impl Fn(&Block) -> T + Sync + Send) -> Vec<T> {
+        use rayon::prelude::*;
+        if rayon::current_thread_index().is_some() {
+            self.blocks.iter().map(f).collect()
+        } else {
+            self.blocks.par_iter().map(f).collect()
+        }
+    }
+
+    /// A block's structural Jacobian entries, in [`Block::jac`] order. Lane l of one
+    /// evaluation is the `Dual64` sweep of the chunk's column l.
+    fn block_jacobian(&self, x: &[f64], blk: &Block) -> Result<Vec<f64>, DomainError> {
+        let z = Self::local(x, &blk.vars);
+        let nv = blk.vars.len();
+        let mut dense = vec![0.0; blk.n_out * nv];
+        let mut out = vec![Dual::<Lanes<SEED_LANES>>::from(0.0); blk.n_out];
+        let mut zd = Vec::with_capacity(nv);
+        for chunk in blk.jac_vars.chunks(SEED_LANES) {
+            zd.clear();
+            zd.extend(z.iter().enumerate().map(|(i, &v)| {
+                let mut eps = [0.0; SEED_LANES];
+                for (l, &j) in chunk.iter().enumerate() {
+                    if i == j {
+                        eps[l] = 1.0;
+                    }
+                }
+                Dual::new(Lanes::splat(v), Lanes(eps))
+            }));
+            self.eval_block(blk.kind, &zd, &mut out)?;
+            for (l, &j) in chunk.iter().enumerate() {
+                for (r, o) in out.iter().enumerate() {
+                    dense[r * nv + j] = o.eps.0[l];
+                }
+            }
+        }
+        Ok(blk.jac.iter().map(|&(r, j)| dense[r * nv + j]).collect())
+    }
+
+    /// A block's contribution Σ_r μ_r ∂²c_r to each of its Hessian pairs, in [`Block::hess`]
+    /// order (empty when its multipliers are all zero). Lane l of one evaluation is the
+    /// `HyperDual64` evaluation of the chunk's pair l.
+    fn block_hessian(
+        &self,
+        x: &[f64],
+        multipliers: &[f64],
+        blk: &Block,
+    ) -> Result<Vec<f64>, DomainError> {
+        let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
+        if mu.iter().all(|&m| m == 0.0) {
+            return Ok(Vec::new());
+        }
+        let z = Self::local(x, &blk.vars);
+        let mut out = vec![HyperDual::<Lanes<SEED_LANES>>::from(0.0); blk.n_out];
+        let mut zh = Vec::with_capacity(z.len());
+        let mut contributions = Vec::with_capacity(blk.hess.len());
+        for pairs in blk.hess.chunks(SEED_LANES) {
+            zh.clear();
+            zh.extend(z.iter().enumerate().map(|(i, &v)| {
+                let (mut eps1, mut eps2) = ([0.0; SEED_LANES], [0.0; SEED_LANES]);
+                for (l, &(a, b)) in pairs.iter().enumerate() {
+                    if i == a {
+                        eps1[l] = 1.0;
+                    }
+                    if i == b {
+                        eps2[l] = 1.0;
+                    }
+                }
+                HyperDual::new(Lanes::splat(v), Lanes(eps1), Lanes(eps2), Lanes::splat(0.0))
+            }));
+            self.eval_block(blk.kind, &zh, &mut out)?;
+            contributions.extend((0..pairs.len()).map(|l| {
+                out.iter()
+                    .zip(mu)
+                    .map(|(o, m)| o.eps1eps2.0[l] * m)
+                    .sum::<f64>()
+            }));
+        }
+        Ok(contributions)
+    }
+
     /// Constraint bounds (lower, upper).
     pub fn constraint_bounds_vec(&self) -> (&[f64], &[f64]) {
         (&self.lower_g, &self.upper_g)
@@ -1067,27 +1164,12 @@ impl NlpProblem for HzdProblem {
     }
 
     fn jacobian_values(&self, x: &[f64], values: &mut [f64]) -> Result<(), DomainError> {
+        // Each block fills its own run of entries, in block order.
         let mut at = 0;
-        let mut out = Vec::new();
-        for blk in &self.blocks {
-            let z = Self::local(x, &blk.vars);
-            let mut dense = vec![0.0; blk.n_out * blk.vars.len()];
-            out.resize(blk.n_out, Dual64::from(0.0));
-            for &j in &blk.jac_vars {
-                let zd: Vec<Dual64> = z
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &v)| Dual64::new(v, if i == j { 1.0 } else { 0.0 }))
-                    .collect();
-                self.eval_block(blk.kind, &zd, &mut out[..blk.n_out])?;
-                for (r, o) in out[..blk.n_out].iter().enumerate() {
-                    dense[r * blk.vars.len() + j] = o.eps;
-                }
-            }
-            for &(r, j) in &blk.jac {
-                values[at] = dense[r * blk.vars.len() + j];
-                at += 1;
-            }
+        for block_values in self.map_blocks(|blk| self.block_jacobian(x, blk)) {
+            let block_values = block_values?;
+            values[at..at + block_values.len()].copy_from_slice(&block_values);
+            at += block_values.len();
         }
         Ok(())
     }
@@ -1104,21 +1186,12 @@ impl NlpProblem for HzdProblem {
         values: &mut [f64],
     ) -> Result<(), DomainError> {
         values.fill(0.0);
-        let mut out = Vec::new();
-        for blk in &self.blocks {
-            let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
-            if mu.iter().all(|&m| m == 0.0) {
-                continue;
-            }
-            let z = Self::local(x, &blk.vars);
-            out.resize(blk.n_out, HyperDual64::from(0.0));
-            for (&(a, b), &slot) in blk.hess.iter().zip(&blk.hess_slots) {
-                self.hyper_eval(blk.kind, &z, a, b, &mut out[..blk.n_out])?;
-                values[slot] += out[..blk.n_out]
-                    .iter()
-                    .zip(mu)
-                    .map(|(o, m)| o.eps1eps2 * m)
-                    .sum::<f64>();
+        // Blocks share Hessian slots: their contributions are added in block order, as a
+        // sequential loop would, whatever order they were computed in.
+        let parts = self.map_blocks(|blk| self.block_hessian(x, multipliers, blk));
+        for (blk, contributions) in self.blocks.iter().zip(parts) {
+            for (&slot, value) in blk.hess_slots.iter().zip(contributions?) {
+                values[slot] += value;
             }
         }
         if !self.with_cost {

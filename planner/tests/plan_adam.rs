@@ -128,3 +128,35 @@ fn plans_and_verifies_a_second_different_five_link_walker() {
     println!("{report}");
     assert!(report.passed(1e-6), "{report}");
 }
+
+/// The Jacobian and Hessian are evaluated block by block on the rayon pool when called from
+/// outside it and sequentially from inside it (a co-design sweep); both must give the same bits,
+/// or the same config would not give the same gait.
+#[test]
+fn derivatives_are_bit_identical_in_parallel_and_sequentially() {
+    let (model, _, config) = setup();
+    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
+    let probe = HzdProblem::new(bp.clone(), config.clone(), Vec::new(), true).expect("problem");
+    let x = initial_guess(&bp, &probe.layout, 0.25, 0.65).expect("guess");
+    let p = HzdProblem::new(bp, config, x.clone(), true).expect("problem");
+    let lambda: Vec<f64> = (0..p.num_constraints())
+        .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
+        .collect();
+    let evaluate = || {
+        let mut jac = vec![0.0; p.jacobian_structure().len()];
+        let mut hess = vec![0.0; p.hessian_structure().len()];
+        p.jacobian_values(&x, &mut jac).expect("jacobian");
+        p.hessian_values(&x, 0.7, &lambda, &mut hess)
+            .expect("hessian");
+        let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<u64>>();
+        (bits(&jac), bits(&hess))
+    };
+    let parallel = evaluate();
+    let sequential = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool")
+        .install(evaluate);
+    assert!(parallel.0.iter().any(|&b| b != 0) && parallel.1.iter().any(|&b| b != 0));
+    assert_eq!(parallel, sequential);
+}

@@ -16,6 +16,8 @@
 //!   forward-mode AD ([`ad::DenseAdProblem`]).
 //! * [`check`]: compare any problem's derivatives with finite differences (tests only;
 //!   no solve loop uses finite differences).
+//! * [`lanes`]: a real type of L lanes, so that one evaluation carries L dual seeds (the
+//!   collocation problem's Jacobian columns and Hessian pairs, four at a time).
 //!
 //! Multipliers follow IPOPT's convention: `L = σ f + λᵀ g`; bound multipliers are ≥ 0.
 //!
@@ -35,8 +37,9 @@
 //! - **our own IPM on faer's sparse LDLᵀ**: faer has the factorization (symbolic + numeric
 //!   LDLᵀ with regularization) but not the rest — barrier update, filter, second-order
 //!   corrections, restoration, scaling — months of work to reach IPOPT's robustness; kept as
-//!   the route to speed if ripopt's linear algebra stays the bottleneck (3.5 s of the 5.3 s
-//!   plan is ripopt outside our evaluations).
+//!   the route to speed if ripopt's linear algebra stays the bottleneck (after the derivative
+//!   work of December 2026, feral's LDLᵀ factorizations are about half of the plan: 166 of
+//!   them, ≈ 9 ms each; `planner/NLP.md`).
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
 //!   filter, and its own feasibility restoration; not attempted.
@@ -114,6 +117,7 @@ mod validate;
 
 pub mod ad;
 pub mod check;
+pub mod lanes;
 
 pub use problem::{DomainError, NlpProblem, SparsityPattern};
 pub use ripopt_backend::RipoptSolver;
