@@ -49,8 +49,9 @@
 //! ([`RobotSimConfig`], default 10: 1 ms at 10 kHz, one control period). A held step only
 //! applies the new torques: `q̈ = D⁻¹(Bu − H)` projected by the held contact operator, semi-
 //! implicit Euler, the touchdown search and the stance projection with *exact* kinematics at the
-//! new `q` (positions are never held: the anchors, penetration and fall checks see the true
-//! feet). The hold ends early, and the step is evaluated afresh, whenever the contact set may
+//! new `q` (positions are never held; the penetration record, the fall check and the next
+//! touchdown search use the poses from before the stance projection, which moves the robot by
+//! nanometres, so a held step computes its kinematics once). The hold ends early, and the step is evaluated afresh, whenever the contact set may
 //! change: at a touchdown, a liftoff, a belt step or `set_state`; in flight (no foot on the
 //! ground: the motion is ballistic and a held `D` would not conserve momentum to the
 //! integrator's order); and when a stance foot's normal force drops below 10 % of the robot's
@@ -76,8 +77,8 @@
 //! `H`, the contact solve, the projections and the event search use fixed-size arrays or
 //! buffers sized at construction, and the solver keeps
 //! explicit inverses of `D` and of the contact Schur complement so a held step is a few short
-//! matrix-vector products. About 70–75 simulated seconds per CPU second standing or marching
-//! (README, "Status"; `tests/sim_speed.rs` measures it).
+//! matrix-vector products. 75–90 simulated seconds per CPU second standing or marching on a
+//! shared 2-core VM, short of the 100 wanted (README, "Status"; `tests/sim_speed.rs`).
 //!
 //! ```no_run
 //! use drivers::sim::{RobotSim, RobotSimConfig};
@@ -344,8 +345,6 @@ pub struct RobotSim {
     /// D(q) and H(q, q̇) of the present step (buffers reused every step).
     mass_matrix: nalgebra::DMatrix<f64>,
     drift: nalgebra::DVector<f64>,
-    /// Body poses at the present q, when known (saves a kinematics pass in the fall check).
-    poses: Option<BodyStates<f64>>,
     /// Steps integrated with the present `D`, `H`, factor and contact operator.
     dynamics_age: u32,
     /// `D`, `H`, factor and contact operator must be re-evaluated before the next step (the
@@ -424,7 +423,6 @@ impl RobotSim {
             generalized_force: vec![0.0; n],
             mass_matrix: nalgebra::DMatrix::zeros(n, n),
             drift: nalgebra::DVector::zeros(n),
-            poses: None,
             dynamics_age: 0,
             refresh_due: true,
             stance_bias: [0.0; 2 * MAX_CONTACTS],
@@ -474,7 +472,6 @@ impl RobotSim {
 
     fn set_state_with_stance(&mut self, q: &[f64], dq: &[f64], only: Option<usize>) -> Result<()> {
         self.imu_last = None;
-        self.poses = None;
         self.refresh_due = true;
         let n = self.model.dof();
         for (what, v) in [("q", q), ("dq", dq)] {
@@ -623,12 +620,11 @@ impl RobotSim {
             // Too many events in one step (chatter): integrate the rest without event search.
             self.sub_step(remaining, false)?;
         }
-        self.check_fall()
+        Ok(())
     }
 
     /// Body states, D and H at the present (q, q̇) into the step's buffers, and D factored.
     fn factor_present(&mut self) -> Result<BodyStates<f64>> {
-        self.poses = None;
         let st = self.model.body_states(&self.q, &self.dq)?;
         self.model
             .dynamics_into(&st, &mut self.mass_matrix, &mut self.drift)?;
@@ -720,7 +716,7 @@ impl RobotSim {
         }
 
         // Touchdown of a free foot within the step: the earliest one.
-        let st1 = self.model.body_poses(&self.q)?;
+        let mut st1 = self.model.body_poses(&self.q)?;
         let mut first: Option<(usize, f64)> = None;
         for i in 0..2 {
             if !detect_touchdown || self.contact[i] != Contact::Air {
@@ -745,19 +741,19 @@ impl RobotSim {
             }
             self.t_s += s * h;
             self.touchdown(i)?;
-            self.record_penetration()?;
+            let st = self.model.body_poses(&self.q)?;
+            self.check_end_state(&st);
             return Ok(s * h);
         }
-        // The multi-rate path projects with the contact operator it integrates with.
-        let reload = self.config.dynamics_refresh_substeps == 1;
-        let st2 = if self.project(Some(&st1), reload)? {
-            self.model.body_poses(&self.q)?
-        } else {
-            st1
-        };
+        // The multi-rate path projects with the contact operator it integrates with, and keeps
+        // the poses from before the projection (which moves the robot by nanometres) for the
+        // penetration record, the fall check and the next touchdown search.
+        let exact = self.config.dynamics_refresh_substeps == 1;
+        if self.project(Some(&st1), exact)? && exact {
+            st1 = self.model.body_poses(&self.q)?;
+        }
         self.t_s += h;
-        self.record_penetration_in(&st2);
-        self.poses = Some(st2);
+        self.check_end_state(&st1);
         Ok(h)
     }
 
@@ -992,33 +988,17 @@ impl RobotSim {
         Ok(true)
     }
 
-    fn record_penetration(&mut self) -> Result<()> {
-        let st = self.model.body_poses(&self.q)?;
-        self.record_penetration_in(&st);
-        Ok(())
-    }
-
-    /// Record the foot heights at `st` (the present q) and the deepest penetration.
-    fn record_penetration_in(&mut self, st: &BodyStates<f64>) {
+    /// At the end of a step, from the poses `st` of its final q: record the foot heights (for
+    /// the next touchdown search) and the deepest penetration, and check for a fall.
+    fn check_end_state(&mut self, st: &BodyStates<f64>) {
         for (i, &f) in self.feet.iter().enumerate() {
             let z = self.model.frame_position_in(st, f)[1];
             self.foot_z_m[i] = z;
             self.max_penetration_m = self.max_penetration_m.max(-z);
         }
-    }
-
-    fn check_fall(&mut self) -> Result<()> {
         if self.fallen.is_some() {
-            return Ok(());
+            return;
         }
-        let computed;
-        let st = match &self.poses {
-            Some(st) => st,
-            None => {
-                computed = self.model.body_poses(&self.q)?;
-                &computed
-            }
-        };
         let torso_com = self.model.bodies[0].inertia.com_xz_m;
         let top = self
             .model
@@ -1042,7 +1022,6 @@ impl RobotSim {
                 what,
             });
         }
-        Ok(())
     }
 
     /// World displacement of the belt frame: `−v_belt · t` (piecewise, over belt steps) \[m\].
