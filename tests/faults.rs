@@ -376,7 +376,12 @@ fn short_overrun_burst_rides_through() {
 }
 
 /// The belt steps from the gait speed to +0.05 m/s faster for 2 s: the stance foot is jerked
-/// back. Rides through; the walker has no speed regulation, so it drifts back on the belt.
+/// back. Rides through. The walker has no speed regulation, but its steps quicken on the faster
+/// belt, so the net drift is small and its sign is not robust: measured at touchdown it ranged
+/// from −0.087 to +0.057 m as the simulator's dynamics refresh interval went from 1 to 20 steps
+/// (−0.021 m with every step exact), and nanometre changes of the touchdown search moved the
+/// default's from −0.015 to +0.061 m. Bounded: less than the belt's extra travel, 0.1 m, either
+/// way.
 #[test]
 fn belt_speed_step_rides_through_and_drifts() {
     let v = setup().gait.speed_mps;
@@ -391,11 +396,12 @@ fn belt_speed_step_rides_through_and_drifts() {
         ),
     );
     assert_rides_through("belt-step", &r, 1.5);
-    let drift = r.drift_m - baseline().drift_m;
+    // Compared at touchdown: the hip's end position depends on where in a step the run ends.
+    let drift = r.landing_drift_m - baseline().landing_drift_m;
     println!("belt-step: extra drift {drift:+.3} m (a 0.05 m/s step for 2 s is 0.1 m of belt)");
     assert!(
-        drift < 0.0,
-        "the faster belt carries the walker back: {drift}"
+        drift.abs() < 0.1,
+        "the faster belt moves the walker by less than its extra travel: {drift}"
     );
 }
 

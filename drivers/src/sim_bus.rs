@@ -570,18 +570,19 @@ impl Firmware {
         &mut self,
         q_rad: f64,
         dq_rad_s: f64,
-        dt_s: f64,
+        period: &TickPeriod,
         model: &A1Model,
         rng: &mut ChaCha8Rng,
     ) -> f64 {
-        let per_count = model.joint_rad_per_count();
+        let dt_s = period.dt_s;
+        let per_count = period.joint_rad_per_count;
         let noise = gaussian(rng) * model.encoder_noise_counts;
         let counts = (q_rad / per_count + noise).round() as i64;
         self.q_abs_rad = counts as f64 * per_count;
         let raw_velocity = (counts - self.prev_counts) as f64 * per_count / dt_s;
         self.prev_counts = counts;
-        let alpha = 1.0 - (-core::f64::consts::TAU * model.velocity_filter_hz * dt_s).exp();
-        self.dq_filtered_rad_s += alpha * (raw_velocity - self.dq_filtered_rad_s);
+        self.dq_filtered_rad_s +=
+            period.velocity_filter_gain * (raw_velocity - self.dq_filtered_rad_s);
 
         let q_hat = self.q_abs_rad - self.zero_offset_rad;
         let dq_hat = self.dq_filtered_rad_s;
@@ -603,10 +604,9 @@ impl Firmware {
         self.tau_nm = model.limit_torque_nm(request, dq_rad_s);
 
         // Exact first-order thermal step with the loss held over the tick.
-        let tau_th = model.thermal_resistance_k_per_w * model.thermal_capacitance_j_per_k;
         let steady_c =
             model.ambient_c + model.copper_loss_w(self.tau_nm) * model.thermal_resistance_k_per_w;
-        self.temperature_c = steady_c + (self.temperature_c - steady_c) * (-dt_s / tau_th).exp();
+        self.temperature_c = steady_c + (self.temperature_c - steady_c) * period.thermal_decay;
         if self.temperature_c >= model.over_temperature_c {
             self.overheated = true;
         } else if self.temperature_c < model.recover_temperature_c {
@@ -618,6 +618,31 @@ impl Firmware {
     fn latch(&mut self) {
         if let Some(command) = self.inbox.take() {
             self.active = command;
+        }
+    }
+}
+
+/// The firmware tick and the discrete-time factors that depend only on it and the model.
+struct TickPeriod {
+    dt_s: f64,
+    /// Encoder resolution at the joint \[rad\].
+    joint_rad_per_count: f64,
+    /// Gain of the first-order velocity low-pass over one tick.
+    velocity_filter_gain: f64,
+    /// Decay of the winding's excess temperature over one tick.
+    thermal_decay: f64,
+}
+
+impl TickPeriod {
+    fn new(model: &A1Model) -> Self {
+        let dt_s = 1.0 / model.firmware_rate_hz;
+        let tau_th = model.thermal_resistance_k_per_w * model.thermal_capacitance_j_per_k;
+        Self {
+            dt_s,
+            joint_rad_per_count: model.joint_rad_per_count(),
+            velocity_filter_gain: 1.0
+                - (-core::f64::consts::TAU * model.velocity_filter_hz * dt_s).exp(),
+            thermal_decay: (-dt_s / tau_th).exp(),
         }
     }
 }
@@ -913,16 +938,16 @@ impl<P: JointPlant> SimBus<P> {
 
     /// Advance motors and plant by one control period, then latch received commands.
     fn advance(&mut self) {
-        let dt_s = 1.0 / self.config.model.firmware_rate_hz;
+        let period = TickPeriod::new(&self.config.model);
         for _ in 0..self.substeps {
             self.torques_nm.fill(0.0);
             for f in &mut self.firmware {
                 let j = f.motor.joint;
                 let q = self.plant.position_rad(j);
                 let dq = self.plant.velocity_rad_s(j);
-                self.torques_nm[j] = f.tick(q, dq, dt_s, &self.config.model, &mut self.rng);
+                self.torques_nm[j] = f.tick(q, dq, &period, &self.config.model, &mut self.rng);
             }
-            self.plant.step(&self.torques_nm, dt_s);
+            self.plant.step(&self.torques_nm, period.dt_s);
         }
         for f in &mut self.firmware {
             f.latch();

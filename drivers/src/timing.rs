@@ -67,64 +67,129 @@ pub const fn frame_bits(data_bytes: u32, stuffing: Stuffing) -> u32 {
     }
 }
 
-/// CAN CRC-15 (polynomial 0x4599) over a bit sequence.
-fn crc15(bits: impl Iterator<Item = bool>) -> u16 {
-    let mut crc: u16 = 0;
-    for bit in bits {
-        let feedback = bit ^ ((crc >> 14) & 1 == 1);
-        crc = (crc << 1) & 0x7FFF;
-        if feedback {
-            crc ^= 0x4599;
-        }
+/// CAN CRC-15 generator polynomial (x¹⁵ + x¹⁴ + x¹⁰ + x⁸ + x⁷ + x⁴ + x³ + 1, top bit implied).
+const CRC15_POLY: u16 = 0x4599;
+
+/// The CRC-15 register after one bit (MSB first, no init, no final xor).
+const fn crc15_bit(crc: u16, bit: bool) -> u16 {
+    let feedback = bit ^ ((crc >> 14) & 1 == 1);
+    let shifted = (crc << 1) & 0x7FFF;
+    if feedback {
+        shifted ^ CRC15_POLY
+    } else {
+        shifted
     }
-    crc
 }
 
+/// `CRC15_BYTE[b]`: the register after the eight bits of `b` from a zero register. By
+/// linearity, a byte `b` moves a register `r` to `(r << 8) ^ CRC15_BYTE[(r >> 7) ^ b]`.
+static CRC15_BYTE: [u16; 256] = {
+    let mut table = [0u16; 256];
+    let mut b = 0;
+    while b < 256 {
+        let mut crc = 0;
+        let mut i = 8;
+        while i > 0 {
+            i -= 1;
+            crc = crc15_bit(crc, (b >> i) & 1 == 1);
+        }
+        table[b] = crc;
+        b += 1;
+    }
+    table
+};
+
+/// States of the bit stuffer: 0 before the first bit, else `1 + 4·bit + (run length − 1)` for
+/// the last bit on the wire and the length (1 to 4) of its run.
+const STUFF_STATES: usize = 9;
+
+/// The stuffer after one more frame bit: whether it inserted a stuff bit, and its new state.
+/// After five equal bits it inserts the opposite bit, which starts a new run of length one.
+const fn stuff_step(state: u8, bit: u8) -> (u8, u8) {
+    let (last, len) = if state == 0 {
+        (2, 0)
+    } else {
+        ((state - 1) / 4, (state - 1) % 4 + 1)
+    };
+    let (mut last, mut len) = if bit == last {
+        (last, len + 1)
+    } else {
+        (bit, 1)
+    };
+    let mut stuffed = 0;
+    if len == 5 {
+        stuffed = 1;
+        last ^= 1;
+        len = 1;
+    }
+    (stuffed, 1 + 4 * last + (len - 1))
+}
+
+/// `STUFF_BYTE[state][b]`: the stuff bits inserted while sending the byte `b` (MSB first)
+/// from `state`, and the state after it.
+static STUFF_BYTE: [[(u8, u8); 256]; STUFF_STATES] = {
+    let mut table = [[(0u8, 0u8); 256]; STUFF_STATES];
+    let mut state = 0;
+    while state < STUFF_STATES {
+        let mut b = 0;
+        while b < 256 {
+            let (mut stuffed, mut s) = (0, state as u8);
+            let mut i = 8;
+            while i > 0 {
+                i -= 1;
+                let (k, next) = stuff_step(s, ((b >> i) & 1) as u8);
+                stuffed += k;
+                s = next;
+            }
+            table[state][b] = (stuffed, s);
+            b += 1;
+        }
+        state += 1;
+    }
+    table
+};
+
 /// Bits of this actual standard-id data frame on the wire, stuff bits and interframe
-/// space included; `None` if `id > 0x7FF` or `data.len() > 8`.
+/// space included; `None` if `id > 0x7FF` or `data.len() > 8`. Allocation-free and
+/// table-driven: the simulated bus counts every frame it carries.
 pub fn frame_bits_exact(id: u32, data: &[u8]) -> Option<u32> {
     if id > 0x7FF || data.len() > 8 {
         return None;
     }
     let dlc = data.len() as u32;
-    // SOF, id (MSB first), RTR, IDE, r0, DLC (MSB first), data (MSB first), then the CRC: at
-    // most 19 + 64 + 15 bits, in a fixed buffer (the simulated bus counts every frame).
-    let mut bits = [false; 19 + 64 + 15];
-    let mut n = 0;
-    let mut push = |bits: &mut [bool], value: u32, width: u32| {
-        for i in (0..width).rev() {
-            bits[n] = (value >> i) & 1 == 1;
-            n += 1;
-        }
-    };
-    // SOF 0, id, RTR 0, IDE 0, r0 0, DLC.
-    push(&mut bits, 0, 1);
-    push(&mut bits, id, 11);
-    push(&mut bits, 0, 3);
-    push(&mut bits, dlc, 4);
-    for &byte in data {
-        push(&mut bits, u32::from(byte), 8);
+    // The stuffed bits, MSB first in `word`: SOF 0, id, RTR 0, IDE 0, r0 0, DLC (19 bits),
+    // the data, then the CRC; at most 19 + 64 + 15 = 98 bits.
+    let mut word = u128::from(id << 7 | dlc);
+    // CRC: the first three header bits (SOF and the id's top two), then whole bytes.
+    let mut crc = 0u16;
+    for i in (16..19).rev() {
+        crc = crc15_bit(crc, (word >> i) & 1 == 1);
     }
-    let header_and_data = 19 + 8 * data.len();
-    let crc = crc15(bits[..header_and_data].iter().copied());
-    push(&mut bits, u32::from(crc), 15);
-    let n = header_and_data + 15;
+    let byte_crc = |crc: u16, byte: u8| {
+        ((crc << 8) & 0x7FFF) ^ CRC15_BYTE[usize::from(((crc >> 7) as u8) ^ byte)]
+    };
+    crc = byte_crc(crc, (word >> 8) as u8);
+    crc = byte_crc(crc, word as u8);
+    for &byte in data {
+        crc = byte_crc(crc, byte);
+        word = word << 8 | u128::from(byte);
+    }
+    word = word << 15 | u128::from(crc);
+    // Stuff bits: a byte at a time through the stuffing table, then the last two bits
+    // (34 + 8n stuffed bits are 4 + n bytes and two bits).
+    let n = 19 + 8 * data.len() + 15;
+    let mut state = 0;
     let mut stuff_bits = 0;
-    let mut run_bit = None;
-    let mut run_len = 0;
-    for &bit in &bits[..n] {
-        if Some(bit) == run_bit {
-            run_len += 1;
-        } else {
-            run_bit = Some(bit);
-            run_len = 1;
-        }
-        if run_len == 5 {
-            // The inserted opposite bit starts a new run of length one.
-            stuff_bits += 1;
-            run_bit = Some(!bit);
-            run_len = 1;
-        }
+    for k in 1..=n / 8 {
+        let byte = (word >> (n - 8 * k)) as u8;
+        let (stuffed, next) = STUFF_BYTE[usize::from(state)][usize::from(byte)];
+        stuff_bits += u32::from(stuffed);
+        state = next;
+    }
+    for i in (0..n % 8).rev() {
+        let (stuffed, next) = stuff_step(state, (word >> i) as u8 & 1);
+        stuff_bits += u32::from(stuffed);
+        state = next;
     }
     Some(frame_bits(dlc, Stuffing::None) + stuff_bits)
 }
@@ -264,6 +329,61 @@ mod tests {
 
     const MBIT: u32 = 1_000_000;
 
+    /// CRC-15 over a bit sequence, bit by bit: the definition.
+    fn crc15(bits: impl Iterator<Item = bool>) -> u16 {
+        bits.fold(0, crc15_bit)
+    }
+
+    /// The frame length bit by bit, the independent reference of [`frame_bits_exact`]: the
+    /// frame as a bit vector, its CRC by the definition, then every run counted.
+    fn frame_bits_by_definition(id: u32, data: &[u8]) -> u32 {
+        let mut bits = Vec::new();
+        let mut push = |value: u32, width: u32| {
+            bits.extend((0..width).rev().map(|i| (value >> i) & 1 == 1));
+        };
+        push(0, 1);
+        push(id, 11);
+        push(0, 3);
+        push(data.len() as u32, 4);
+        for &byte in data {
+            push(u32::from(byte), 8);
+        }
+        let crc = crc15(bits.iter().copied());
+        bits.extend((0..15).rev().map(|i| (crc >> i) & 1 == 1));
+        let mut stuffed: Vec<bool> = Vec::new();
+        for bit in bits {
+            stuffed.push(bit);
+            let n = stuffed.len();
+            if n >= 5 && stuffed[n - 5..].iter().all(|&b| b == bit) {
+                stuffed.push(!bit);
+            }
+        }
+        47 + 8 * data.len() as u32 + (stuffed.len() as u32 - (34 + 8 * data.len() as u32))
+    }
+
+    #[test]
+    fn exact_frame_length_matches_the_bit_by_bit_definition() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        for len in 0..=8 {
+            for _ in 0..2000 {
+                let id = rng.random_range(0..0x800);
+                // Sparse and dense payloads too, where the long runs are.
+                let data: Vec<u8> = (0..len)
+                    .map(|_| match rng.random_range(0..4) {
+                        0 => 0x00,
+                        1 => 0xFF,
+                        _ => rng.random(),
+                    })
+                    .collect();
+                assert_eq!(
+                    frame_bits_exact(id, &data),
+                    Some(frame_bits_by_definition(id, &data)),
+                    "id {id:#x} data {data:02x?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn frame_figures_match_hand_computation() {
         // 1+11+3+4+64+15+3+7+3 = 111; stuffable 1+11+3+4+64+15 = 98 -> (98-1)/4 = 24.
@@ -338,6 +458,11 @@ mod tests {
     fn crc15_definition_and_stuffing_of_a_known_frame() {
         // The register after a single 1 bit is the generator polynomial.
         assert_eq!(crc15(core::iter::once(true)), 0x4599);
+        // The byte table is the bitwise register.
+        for b in 0..=255u8 {
+            let bits = (0..8).rev().map(|i| (b >> i) & 1 == 1);
+            assert_eq!(CRC15_BYTE[usize::from(b)], crc15(bits), "{b}");
+        }
         // A message followed by its CRC leaves remainder zero (no init, no final xor).
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         for _ in 0..100 {

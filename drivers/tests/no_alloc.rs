@@ -1,28 +1,33 @@
-//! `MotorBus::exchange` on `SimBus` allocates nothing: a counting global allocator sees
-//! zero allocations over many cycles once the bus is active. Only allocations made on
-//! the test's own thread count (the test harness allocates on its threads meanwhile).
+//! `MotorBus::exchange` on `SimBus` allocates nothing, over a simple plant and over the
+//! simulated robot standing and stepping: a counting global allocator sees zero allocations
+//! over many cycles once the bus is active. Only allocations made on the test's own thread
+//! count (the test harness allocates on its threads meanwhile).
 #![allow(unsafe_code, clippy::unwrap_used)] // the counting allocator must implement GlobalAlloc
 
 use core::time::Duration;
 use drivers::a1::{Command, MotorId, Reply};
 use drivers::bus::{MotorBus, MotorSpec};
-use drivers::sim_bus::{A1Model, InertiaDampingPlant, RigidJoint, SimBus, SimConfig, SimMotor};
+use drivers::sim::{LegJoint, RobotSim, RobotSimConfig, SimEvent};
+use drivers::sim_bus::{
+    A1Model, InertiaDampingPlant, JointPlant, RigidJoint, SimBus, SimConfig, SimMotor,
+};
+use model::Side;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
 
 thread_local! {
     static COUNTING: Cell<bool> = const { Cell::new(false) };
+    /// Allocations counted on this thread.
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
 }
 
 // SAFETY: forwards to the system allocator unchanged; only counts calls.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if COUNTING.try_with(Cell::get).unwrap_or(false) {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+            let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
         }
         // SAFETY: same contract as the caller's.
         unsafe { System.alloc(layout) }
@@ -76,6 +81,69 @@ fn exchange_allocates_nothing() {
             .unwrap();
     }
     COUNTING.with(|c| c.set(false));
-    let during = ALLOCATIONS.load(Ordering::Relaxed);
+    let during = ALLOCATIONS.with(Cell::get);
     assert_eq!(during, 0, "{during} allocations in 500 exchanges");
+}
+
+#[test]
+fn exchange_with_the_simulated_robot_allocates_nothing() {
+    let robot = model::design::generate_model(&model::design::DesignLengths::ADAM)
+        .unwrap()
+        .0;
+    let sim = RobotSim::new(&robot, RobotSimConfig::default()).unwrap();
+    let target: Vec<f64> = (0..sim.joint_count())
+        .map(|j| sim.position_rad(j))
+        .collect();
+    let ff = sim.static_torques_nm().unwrap();
+    let knee = sim.joint_index(Side::Left, LegJoint::Knee);
+    let motors = sim.leg_motors(0, 1);
+    let config = SimConfig {
+        control_rate_hz: 1000.0,
+        bitrate_bps: 1_000_000,
+        bus_count: 2,
+        motors: motors.clone(),
+        model: A1Model::default(),
+        seed: 1,
+    };
+    let mut bus = SimBus::new(config, sim).unwrap();
+    let specs: Vec<_> = motors.iter().map(|m| m.spec).collect();
+    bus.configure(&specs).unwrap();
+    bus.activate().unwrap();
+    let mut replies: Vec<_> = specs.iter().map(|s| Reply::zeroed(s.id)).collect();
+    let mut commands = Vec::with_capacity(motors.len());
+    COUNTING.with(|c| c.set(true));
+    // Stand for 0.25 s, then lift the left foot for 0.15 s and put it down: held and fresh
+    // dynamics, a liftoff and a touchdown.
+    for k in 0..600 {
+        commands.clear();
+        for m in &motors {
+            let lift = if (250..400).contains(&k) && m.joint == knee {
+                0.35
+            } else {
+                0.0
+            };
+            commands.push(Command::pd(
+                m.spec.id,
+                target[m.joint] + lift,
+                0.0,
+                300.0,
+                4.0,
+                ff[m.joint],
+            ));
+        }
+        bus.exchange(&commands, &mut replies, Duration::from_millis(1))
+            .unwrap();
+    }
+    COUNTING.with(|c| c.set(false));
+    let during = ALLOCATIONS.with(Cell::get);
+    let events = bus.plant().events();
+    assert!(
+        events.iter().any(|e| matches!(e, SimEvent::Liftoff { .. })),
+        "{events:?}"
+    );
+    assert!(
+        events.iter().any(|e| matches!(e, SimEvent::Touchdown(_))),
+        "{events:?}"
+    );
+    assert_eq!(during, 0, "{during} allocations in 600 exchanges");
 }

@@ -22,7 +22,12 @@ pub struct Pose<S> {
 /// Rotates a body-frame vector into the world for a frame at pitch θ.
 #[inline]
 pub fn rot<S: Real>(pitch: S, v: [S; 2]) -> [S; 2] {
-    let (s, c) = pitch.sin_cos();
+    rot_sin_cos(pitch.sin_cos(), v)
+}
+
+/// [`rot`] with `(sin θ, cos θ)` given.
+#[inline]
+fn rot_sin_cos<S: Real>((s, c): (S, S), v: [S; 2]) -> [S; 2] {
     [c * v[0] + s * v[1], c * v[1] - s * v[0]]
 }
 
@@ -142,6 +147,10 @@ impl PlanarModel {
         };
         st.vel_xz[0] = [dq[0], dq[1]];
         st.omega[0] = dq[2];
+        // (sin, cos) of each body's pitch, once per distinct pitch: a prismatic joint with no
+        // origin pitch keeps its parent's.
+        let mut sin_cos = [(z, z); MAX_BODIES];
+        sin_cos[0] = q[2].sin_cos();
         for (b, body) in self.bodies.iter().enumerate().skip(1) {
             let (Some(p), Some(j)) = (body.parent, body.joint) else {
                 continue;
@@ -150,15 +159,22 @@ impl PlanarModel {
             let (qj, dqj) = (q[joint.coordinate], dq[joint.coordinate]);
             let pp = st.pose[p];
             let phi = pp.pitch_rad + S::from(body.origin_pitch_rad);
-            let mut d = rot(pp.pitch_rad, c2(body.origin_xz_m));
+            let mut d = rot_sin_cos(sin_cos[p], c2(body.origin_xz_m));
             let wp = st.omega[p];
             let mut v = add(st.vel_xz[p], scale(wp, perp(d)));
             let (pitch, omega, extra_acc) = match joint.kind {
                 JointKind::Revolute { axis_sign } => {
-                    (phi + qj * axis_sign, wp + dqj * axis_sign, [z, z])
+                    let pitch = phi + qj * axis_sign;
+                    sin_cos[b] = pitch.sin_cos();
+                    (pitch, wp + dqj * axis_sign, [z, z])
                 }
                 JointKind::Prismatic { axis_xz } => {
-                    let a = rot(phi, c2(axis_xz));
+                    sin_cos[b] = if body.origin_pitch_rad == 0.0 {
+                        sin_cos[p]
+                    } else {
+                        phi.sin_cos()
+                    };
+                    let a = rot_sin_cos(sin_cos[b], c2(axis_xz));
                     d = add(d, scale(qj, a));
                     v = add(add(st.vel_xz[p], scale(wp, perp(d))), scale(dqj, a));
                     (phi, wp, scale(wp * dqj * 2.0, perp(a)))
@@ -269,6 +285,10 @@ impl PlanarModel {
     /// World position of frame `frame` from computed body states.
     pub fn frame_position_in<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> [S; 2] {
         let f = &self.frames[frame];
+        if f.offset_xz_m == [0.0, 0.0] {
+            // At its body's origin (a point foot): nothing to rotate.
+            return st.pose[f.body].xz_m;
+        }
         self.point_position(st, f.body, c2(f.offset_xz_m))
     }
 

@@ -80,14 +80,38 @@ pub struct TickRecord {
 pub struct LogProducer {
     ring: rtrb::Producer<LogRecord>,
     dropped: Arc<AtomicU64>,
+    wait_when_full: bool,
 }
 
 impl LogProducer {
-    /// Queue a record; when the ring is full the record is dropped and counted.
+    /// Queue a record; when the ring is full the record is dropped and counted, or, after
+    /// [`LogProducer::wait_when_full`], the push waits for room (drops only if the logger has
+    /// stopped).
     pub fn push(&mut self, record: LogRecord) {
-        if self.ring.push(record).is_err() {
-            self.dropped.fetch_add(1, Ordering::Relaxed);
+        let mut record = record;
+        loop {
+            match self.ring.push(record) {
+                Ok(()) => return,
+                Err(rtrb::PushError::Full(r))
+                    if self.wait_when_full && !self.ring.is_abandoned() =>
+                {
+                    record = r;
+                    // The logger drains every 2 ms.
+                    std::thread::sleep(std::time::Duration::from_micros(500));
+                }
+                Err(_) => {
+                    self.dropped.fetch_add(1, Ordering::Relaxed);
+                    return;
+                }
+            }
         }
+    }
+
+    /// Wait for room in a full queue instead of dropping: for a loop on a simulated clock,
+    /// where waiting costs no simulated time and the simulation may outrun the writer. A
+    /// real-time loop never waits.
+    pub fn wait_when_full(&mut self, wait: bool) {
+        self.wait_when_full = wait;
     }
 
     /// Records dropped so far.
@@ -312,6 +336,7 @@ pub fn start(
         LogProducer {
             ring: producer,
             dropped: dropped.clone(),
+            wait_when_full: false,
         },
         Logger {
             path,
@@ -802,6 +827,27 @@ mod tests {
         assert!(dropped > 0);
         assert_eq!(stats.dropped, dropped);
         assert_eq!(stats.records + stats.dropped, 10_000);
+        std::fs::remove_file(&path).unwrap();
+    }
+
+    #[test]
+    fn a_producer_that_waits_when_full_drops_nothing() {
+        let setup = Setup::shipped().unwrap();
+        let layout = SlotLayout::new(&setup.config, false);
+        let ctx = LogContext::new(&setup, &layout);
+        let path = temp_path("waits");
+        let (mut tx, logger) = start(&path, ctx, 16).unwrap();
+        tx.wait_when_full(true);
+        // The same burst as above: every push now waits for the writer.
+        for k in 0..10_000u64 {
+            tx.push(LogRecord::Sample(StateSample {
+                tick: k,
+                ..StateSample::default()
+            }));
+        }
+        assert_eq!(tx.dropped(), 0);
+        let stats = logger.finish().unwrap();
+        assert_eq!((stats.records, stats.dropped), (10_000, 0));
         std::fs::remove_file(&path).unwrap();
     }
 }

@@ -37,6 +37,11 @@ pub trait Clock {
     fn now_s(&mut self) -> f64;
     /// Block until `now_s() >= deadline_s`.
     fn sleep_until(&mut self, deadline_s: f64);
+    /// Whether this is simulated time: the loop then lets a full log queue wait for the writer
+    /// instead of dropping records (waiting costs no simulated time). Real time: never.
+    fn is_simulated(&self) -> bool {
+        false
+    }
 }
 
 /// Real time: CLOCK_MONOTONIC and absolute-deadline sleeping.
@@ -64,6 +69,9 @@ impl Clock for SimulatedClock {
     }
     fn sleep_until(&mut self, deadline_s: f64) {
         self.now_s = self.now_s.max(deadline_s);
+    }
+    fn is_simulated(&self) -> bool {
+        true
     }
 }
 
@@ -397,8 +405,9 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         .insert("start_walking".into(), options.start_walking.to_string());
     let (mut log_tx, logger) = match &options.log_path {
         Some(path) => {
-            let (tx, logger) =
+            let (mut tx, logger) =
                 crate::log::start(path, log_context, config.telemetry.log_queue_capacity)?;
+            tx.wait_when_full(clock.is_simulated());
             (Some(tx), Some(logger))
         }
         None => (None, None),

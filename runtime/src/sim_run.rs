@@ -99,7 +99,11 @@ pub struct SimWalkReport {
     /// Mean walking speed over the belt, mean step length / mean step duration, m/s.
     pub speed_mps: f64,
     /// World displacement of the hip over the run (positive: forward, against the belt), m.
+    /// Where in a step the run ends moves it by centimetres; see `landing_drift_m`.
     pub drift_m: f64,
+    /// World displacement of the landing foot: the last step's touchdown point minus the
+    /// stance foot at the start (both at touchdown, the same gait phase), m; 0 without steps.
+    pub landing_drift_m: f64,
     /// Time the run walked: up to the fall, or the whole run, s.
     pub walked_s: f64,
     /// The fall, if any: time, s, and cause.
@@ -238,6 +242,7 @@ pub fn walk_with_operator(
     let bus = sim_backend(setup, options)?;
     let belt_speed_mps = bus.plant().config().belt_speed_mps;
     let x0_m = bus.plant().base_position_m()[0];
+    let stance_x0_m = bus.plant().foot_position_m(setup.gait.stance_leg)[0];
     let period_s = 1.0 / setup.config.loop_.rate_hz;
     let none = FaultProfile::none();
     let profile = options.faults.as_ref().unwrap_or(&none);
@@ -281,6 +286,7 @@ pub fn walk_with_operator(
         mean_step_duration_s: f64::NAN,
         speed_mps: f64::NAN,
         drift_m: sim.base_position_m()[0] - x0_m,
+        landing_drift_m: 0.0,
         walked_s: sim.time_s(),
         fall: None,
         sim_fault_s: None,
@@ -302,6 +308,7 @@ pub fn walk_with_operator(
                     continue;
                 }
                 report.steps += 1;
+                report.landing_drift_m = td.foot_x_m - stance_x0_m;
                 length_sum_m += td.step_length_m;
                 duration_sum_s += td.t_s - last_t_s;
                 last_side = td.side;
@@ -521,6 +528,9 @@ impl Clock for FaultClock {
             .find(|(a, b, _)| (*a..*b).contains(&deadline_s))
             .map_or(0.0, |w| w.2);
         self.now_s = self.now_s.max(deadline_s + late_s);
+    }
+    fn is_simulated(&self) -> bool {
+        true
     }
 }
 

@@ -40,15 +40,45 @@
 //!   feet are projected back onto their anchors (position, then velocity, in the kinetic-energy
 //!   metric) so the constraint drift does not accumulate.
 //!
+//! # Multi-rate dynamics
+//! The motors' PD runs at 10 kHz (in [`crate::sim_bus::SimBus`]) and so does the integrator,
+//! but the rigid-body quantities change on a much slower time scale: the joints move a few
+//! milliradians per millisecond. So `D(q)`, `H(q, q̇)`, the factor of `D`, the contact
+//! operator (stance-foot Jacobian `J`, `D⁻¹Jᵀ`, the factored `J D⁻¹ Jᵀ`) and `J̇ q̇` are
+//! evaluated at the start of a step and then **held for `dynamics_refresh_substeps` steps**
+//! ([`RobotSimConfig`], default 10: 1 ms at 10 kHz, one control period). A held step only
+//! applies the new torques: `q̈ = D⁻¹(Bu − H)` projected by the held contact operator, semi-
+//! implicit Euler, the touchdown search and the stance projection with *exact* kinematics at the
+//! new `q` (positions are never held; the penetration record, the fall check and the next
+//! touchdown search use the poses from before the stance projection, which moves the robot by
+//! nanometres, so a held step computes its kinematics once). The hold ends early, and the step is evaluated afresh, whenever the contact set may
+//! change: at a touchdown, a liftoff, a belt step or `set_state`; in flight (no foot on the
+//! ground: the motion is ballistic and a held `D` would not conserve momentum to the
+//! integrator's order); and when a stance foot's normal force drops below 10 % of the robot's
+//! weight (liftoff is decided on fresh dynamics). The impact map is always exact.
+//!
+//! Why the error is small: over a hold of `T` = 1 ms, `D` and `H` change by `O(T·|q̇|)` relative
+//! to their size (≈ 0.5 % at 5 rad/s), the PD torques that dominate a walking step are applied
+//! exactly every step, and positions are exact. `tests/sim_fidelity.rs` runs PD-held standing
+//! and marching in place with touchdowns and liftoffs both ways, same seed, through the A1
+//! firmware model: standing differs by < 1e-4° in the joints and < 1 µm at the torso; marching
+//! by a few hundredths of a degree and a few tenths of a millimetre, the size of the exact
+//! path's own change when its step is halved (a hybrid system's event times shift with any
+//! perturbation). `dynamics_refresh_substeps: 1` is the exact path: everything re-evaluated
+//! every step, which is the model above without the hold.
+//!
 //! # Guarantees (checked by tests)
-//! * ground penetration of any foot ≤ [`PENETRATION_TOLERANCE_M`] (1 µm);
+//! * ground penetration of any foot ≤ [`PENETRATION_TOLERANCE_M`] (1 µm) until a fall;
 //! * kinetic energy after every impact ≤ before (plastic impact = projection in the `D` metric);
 //! * same inputs, same seed → bit-identical trajectories and IMU samples.
 //!
 //! # Cost
-//! One step calls `model.dynamics` (which allocates its `D` and `H`); the contact solve, the
-//! projections and the event search use buffers sized at construction. The simulator is not the
-//! runtime's control tick, so these allocations are acceptable here.
+//! A step allocates nothing (only the event list, past its first 64 events): kinematics, `D`,
+//! `H`, the contact solve, the projections and the event search use fixed-size arrays or
+//! buffers sized at construction, and the solver keeps
+//! explicit inverses of `D` and of the contact Schur complement so a held step is a few short
+//! matrix-vector products. 75–90 simulated seconds per CPU second standing or marching on a
+//! shared 2-core VM, short of the 100 wanted (README, "Status"; `tests/sim_speed.rs`).
 //!
 //! ```no_run
 //! use drivers::sim::{RobotSim, RobotSimConfig};
@@ -82,6 +112,11 @@ use thiserror::Error;
 
 /// Largest foot penetration the simulator allows itself \[m\].
 pub const PENETRATION_TOLERANCE_M: f64 = 1e-6;
+
+/// A step keeps the frozen dynamics only while every stance foot carries at least this
+/// fraction of the robot's weight: nearer to liftoff, the contact set is decided on fresh
+/// dynamics (module docs, "Multi-rate dynamics").
+const FROZEN_MIN_NORMAL_FORCE_FRACTION: f64 = 0.1;
 
 /// Most events (touchdowns) handled inside one integration step.
 const MAX_EVENTS_PER_STEP: usize = 4;
@@ -135,6 +170,10 @@ pub struct RobotSimConfig {
     pub stand_hip_height_m: Option<f64>,
     /// Horizontal distance of each foot from the hip in the initial standing pose \[m\].
     pub stand_half_stance_m: f64,
+    /// Integration steps that share one evaluation of `D`, `H`, the factor of `D` and the contact
+    /// operator (see the module docs, "Multi-rate dynamics"): 1 re-evaluates them every step
+    /// (the exact path); the default 10 evaluates them once per millisecond at 10 kHz.
+    pub dynamics_refresh_substeps: u32,
 }
 
 impl Default for RobotSimConfig {
@@ -147,6 +186,7 @@ impl Default for RobotSimConfig {
             fall_pitch_limit_rad: 1.0,
             stand_hip_height_m: None,
             stand_half_stance_m: 0.08,
+            dynamics_refresh_substeps: 10,
         }
     }
 }
@@ -305,8 +345,17 @@ pub struct RobotSim {
     /// D(q) and H(q, q̇) of the present step (buffers reused every step).
     mass_matrix: nalgebra::DMatrix<f64>,
     drift: nalgebra::DVector<f64>,
-    /// Body poses at the present q, when known (saves a kinematics pass in the fall check).
-    poses: Option<BodyStates<f64>>,
+    /// Steps integrated with the present `D`, `H`, factor and contact operator.
+    dynamics_age: u32,
+    /// `D`, `H`, factor and contact operator must be re-evaluated before the next step (the
+    /// state or the contact set changed).
+    refresh_due: bool,
+    /// `−J̇ q̇` of the stance feet at the last evaluation (the contact operator's target).
+    stance_bias: [f64; 2 * MAX_CONTACTS],
+    /// Foot heights at the end of the last step \[m\] (the touchdown search of a frozen step).
+    foot_z_m: [f64; 2],
+    /// The robot's weight \[N\].
+    weight_n: f64,
     reduced_a: Vec<f64>,
     reduced_b: Vec<f64>,
     torque_nm: Vec<f64>,
@@ -374,7 +423,11 @@ impl RobotSim {
             generalized_force: vec![0.0; n],
             mass_matrix: nalgebra::DMatrix::zeros(n, n),
             drift: nalgebra::DVector::zeros(n),
-            poses: None,
+            dynamics_age: 0,
+            refresh_due: true,
+            stance_bias: [0.0; 2 * MAX_CONTACTS],
+            foot_z_m: [0.0; 2],
+            weight_n: model.total_mass_kg() * model.gravity_mps2,
             reduced_a: vec![0.0; nr],
             reduced_b: vec![0.0; nr],
             contact: [Contact::Air; 2],
@@ -419,7 +472,7 @@ impl RobotSim {
 
     fn set_state_with_stance(&mut self, q: &[f64], dq: &[f64], only: Option<usize>) -> Result<()> {
         self.imu_last = None;
-        self.poses = None;
+        self.refresh_due = true;
         let n = self.model.dof();
         for (what, v) in [("q", q), ("dq", dq)] {
             if v.len() != n {
@@ -454,7 +507,7 @@ impl RobotSim {
             };
         }
         self.factor_present()?;
-        self.project(None)?;
+        self.project(None, true)?;
         self.fallen = None;
         self.max_penetration_m = 0.0;
         self.fault_t_s = None;
@@ -498,13 +551,14 @@ impl RobotSim {
         self.belt_since_t_s = self.t_s;
         self.config.belt_speed_mps = speed_mps;
         self.dq[0] += step;
+        self.refresh_due = true;
         // The IMU differentiates the belt-frame velocity: shift its reference too, so it sees
         // only the world acceleration (the impulse), not the change of frame.
         if let Some((_, v)) = self.imu_last.as_mut() {
             v[0] += step;
         }
         self.factor_present()?;
-        self.project(None).map(|_| ())
+        self.project(None, true).map(|_| ())
     }
 
     /// Fault of the IMU output from the next read on ([`ImuFault::None`] heals it).
@@ -566,12 +620,11 @@ impl RobotSim {
             // Too many events in one step (chatter): integrate the rest without event search.
             self.sub_step(remaining, false)?;
         }
-        self.check_fall()
+        Ok(())
     }
 
     /// Body states, D and H at the present (q, q̇) into the step's buffers, and D factored.
     fn factor_present(&mut self) -> Result<BodyStates<f64>> {
-        self.poses = None;
         let st = self.model.body_states(&self.q, &self.dq)?;
         self.model
             .dynamics_into(&st, &mut self.mass_matrix, &mut self.drift)?;
@@ -597,9 +650,19 @@ impl RobotSim {
     }
 
     /// Integrate up to `h`; returns the time integrated (less than `h` if a touchdown
-    /// interrupted the step at that instant).
+    /// interrupted the step at that instant). Re-evaluates `D`, `H`, the factor and the contact
+    /// operator first when they are due (module docs, "Multi-rate dynamics").
     fn sub_step(&mut self, h: f64, detect_touchdown: bool) -> Result<f64> {
-        let st = self.factor_present()?;
+        let frozen = !self.refresh_due && self.dynamics_age < self.config.dynamics_refresh_substeps;
+        let st = if frozen {
+            None
+        } else {
+            let st = self.factor_present()?;
+            self.refresh_due = false;
+            self.dynamics_age = 0;
+            Some(st)
+        };
+        self.dynamics_age += 1;
         for (f, hv) in self.generalized_force.iter_mut().zip(self.drift.iter()) {
             *f = -hv;
         }
@@ -615,27 +678,32 @@ impl RobotSim {
             .gather(&self.generalized_force, &mut self.reduced_a);
         self.solver.solve_mass(&mut self.reduced_a);
 
-        // Stance dynamics: the first consistent contact set (stance feet push, released feet
-        // accelerate away from the ground), from keeping every stance foot to keeping none.
-        self.force_n = [[0.0; 2]; 2];
         let (frames, sides, k) = self.stance_frames();
-        let mut chosen = None;
-        for &mask in candidate_masks(k) {
-            let accepted = self.solve_stance(&st, &frames, &sides, k, mask)?;
-            if accepted {
-                chosen = Some(mask);
-                break;
+        if let Some(st) = &st {
+            // Stance dynamics: the first consistent contact set (stance feet push, released
+            // feet accelerate away from the ground), from keeping every stance foot to none.
+            let mut chosen = None;
+            for &mask in candidate_masks(k) {
+                let accepted = self.solve_stance(st, &frames, &sides, k, mask)?;
+                if accepted {
+                    chosen = Some(mask);
+                    break;
+                }
             }
-        }
-        // No consistent set (rigid pinning can demand pull): keep every stance foot.
-        let mask = chosen.unwrap_or(ALL_KEPT);
-        if chosen.is_none() {
-            self.solve_stance(&st, &frames, &sides, k, ALL_KEPT)?;
-        } else if mask != ALL_KEPT {
-            // The accepted solve is in `reduced_b`; release the dropped feet.
-            for r in (0..k).filter(|&r| mask & (1 << r) == 0) {
-                self.release(sides[r]);
+            // No consistent set (rigid pinning can demand pull): keep every stance foot.
+            let mask = chosen.unwrap_or(ALL_KEPT);
+            if chosen.is_none() {
+                self.solve_stance(st, &frames, &sides, k, ALL_KEPT)?;
+            } else if mask != ALL_KEPT {
+                // The accepted solve is in `reduced_b`; release the dropped feet.
+                for r in (0..k).filter(|&r| mask & (1 << r) == 0) {
+                    self.release(sides[r]);
+                }
             }
+        } else if !self.solve_frozen_stance(&sides, k) {
+            // In flight, or a stance foot near liftoff: this step is integrated exactly.
+            self.refresh_due = true;
+            return self.sub_step(h, detect_touchdown);
         }
         self.report_friction();
 
@@ -648,13 +716,16 @@ impl RobotSim {
         }
 
         // Touchdown of a free foot within the step: the earliest one.
-        let st1 = self.model.body_poses(&self.q)?;
+        let mut st1 = self.model.body_poses(&self.q)?;
         let mut first: Option<(usize, f64)> = None;
         for i in 0..2 {
             if !detect_touchdown || self.contact[i] != Contact::Air {
                 continue;
             }
-            let z0 = self.model.frame_position_in(&st, self.feet[i])[1];
+            let z0 = match &st {
+                Some(st) => self.model.frame_position_in(st, self.feet[i])[1],
+                None => self.foot_z_m[i],
+            };
             let z1 = self.model.frame_position_in(&st1, self.feet[i])[1];
             if z1 < 0.0 && z1 < z0 {
                 let s = if z0 > 0.0 { z0 / (z0 - z1) } else { 0.0 };
@@ -670,18 +741,41 @@ impl RobotSim {
             }
             self.t_s += s * h;
             self.touchdown(i)?;
-            self.record_penetration()?;
+            let st = self.model.body_poses(&self.q)?;
+            self.check_end_state(&st);
             return Ok(s * h);
         }
-        let st2 = if self.project(Some(&st1))? {
-            self.model.body_poses(&self.q)?
-        } else {
-            st1
-        };
+        // The multi-rate path projects with the contact operator it integrates with, and keeps
+        // the poses from before the projection (which moves the robot by nanometres) for the
+        // penetration record, the fall check and the next touchdown search.
+        let exact = self.config.dynamics_refresh_substeps == 1;
+        if self.project(Some(&st1), exact)? && exact {
+            st1 = self.model.body_poses(&self.q)?;
+        }
         self.t_s += h;
-        self.record_penetration_in(&st2);
-        self.poses = Some(st2);
+        self.check_end_state(&st1);
         Ok(h)
+    }
+
+    /// The stance dynamics with the contact operator and `−J̇ q̇` of the last evaluation, every
+    /// stance foot kept; leaves q̈ (reduced) in `reduced_b` and the forces in `force_n`.
+    /// Whether the step may keep them: some foot is in stance and every stance foot pushes
+    /// with at least [`FROZEN_MIN_NORMAL_FORCE_FRACTION`] of the robot's weight (otherwise the
+    /// step must be integrated, and the contact set chosen, on fresh dynamics).
+    fn solve_frozen_stance(&mut self, sides: &[usize; MAX_CONTACTS], k: usize) -> bool {
+        if k == 0 {
+            return false;
+        }
+        self.reduced_b.copy_from_slice(&self.reduced_a);
+        let mut lambda = [0.0; 2 * MAX_CONTACTS];
+        self.solver
+            .constrain(&mut self.reduced_b, &self.stance_bias, &mut lambda);
+        self.force_n = [[0.0; 2]; 2];
+        for r in 0..k {
+            self.force_n[sides[r]] = [lambda[2 * r], lambda[2 * r + 1]];
+        }
+        let min_normal_n = FROZEN_MIN_NORMAL_FORCE_FRACTION * self.weight_n;
+        (0..k).all(|r| lambda[2 * r + 1] >= min_normal_n)
     }
 
     /// Solve the stance dynamics keeping the stance feet `r` with bit `r` of `mask` set;
@@ -710,6 +804,7 @@ impl RobotSim {
             c[2 * r] = -b[0];
             c[2 * r + 1] = -b[1];
         }
+        self.stance_bias = c;
         self.reduced_b.copy_from_slice(&self.reduced_a);
         let mut lambda = [0.0; 2 * MAX_CONTACTS];
         self.solver.constrain(&mut self.reduced_b, &c, &mut lambda);
@@ -743,6 +838,7 @@ impl RobotSim {
     }
 
     fn release(&mut self, i: usize) {
+        self.refresh_due = true;
         self.contact[i] = Contact::Air;
         self.friction_exceeded[i] = false;
         self.events.push(SimEvent::Liftoff {
@@ -777,6 +873,7 @@ impl RobotSim {
     /// Plastic impact of foot `i` at the present state (the foot is on the ground).
     fn touchdown(&mut self, i: usize) -> Result<()> {
         let kinetic_energy_before_j = self.model.kinetic_energy(&self.q, &self.dq)?;
+        self.refresh_due = true;
         let st = self.factor_present()?;
         let p = self.model.frame_position_in(&st, self.feet[i]);
         self.contact[i] = Contact::Stance {
@@ -832,7 +929,7 @@ impl RobotSim {
         for (&c, &v) in self.solver.free().iter().zip(&self.reduced_b) {
             self.dq[c] = v;
         }
-        self.project(None)?;
+        self.project(None, true)?;
         let kinetic_energy_after_j = self.model.kinetic_energy(&self.q, &self.dq)?;
         let st = self.model.body_poses(&self.q)?;
         let other = self.model.frame_position_in(&st, self.feet[1 - i]);
@@ -851,8 +948,10 @@ impl RobotSim {
 
     /// Pull the stance feet back onto their anchors and their velocities to zero, in the
     /// kinetic-energy metric of the last factored `D` (corrections are O(h²) small). `poses`:
-    /// the body poses at the present q, if already computed. Whether q changed.
-    fn project(&mut self, poses: Option<&BodyStates<f64>>) -> Result<bool> {
+    /// the body poses at the present q, if already computed; `reload`: load the contact
+    /// Jacobian at these poses (otherwise project with the loaded contact operator, which must
+    /// be that of the present stance feet). Whether q changed.
+    fn project(&mut self, poses: Option<&BodyStates<f64>>, reload: bool) -> Result<bool> {
         let (frames, sides, k) = self.stance_frames();
         if k == 0 {
             return Ok(false);
@@ -865,7 +964,9 @@ impl RobotSim {
                 &computed
             }
         };
-        self.solver.set_contacts(&self.model, st, &frames[..k]);
+        if reload {
+            self.solver.set_contacts(&self.model, st, &frames[..k]);
+        }
         let mut c = [0.0; 2 * MAX_CONTACTS];
         for r in 0..k {
             let p = self.model.frame_position_in(st, frames[r]);
@@ -887,31 +988,21 @@ impl RobotSim {
         Ok(true)
     }
 
-    fn record_penetration(&mut self) -> Result<()> {
-        let st = self.model.body_poses(&self.q)?;
-        self.record_penetration_in(&st);
-        Ok(())
-    }
-
-    fn record_penetration_in(&mut self, st: &BodyStates<f64>) {
-        for &f in &self.feet {
+    /// At the end of a step, from the poses `st` of its final q: record the foot heights (for
+    /// the next touchdown search) and the deepest penetration, and check for a fall.
+    fn check_end_state(&mut self, st: &BodyStates<f64>) {
+        for (i, &f) in self.feet.iter().enumerate() {
             let z = self.model.frame_position_in(st, f)[1];
+            self.foot_z_m[i] = z;
             self.max_penetration_m = self.max_penetration_m.max(-z);
         }
-    }
-
-    fn check_fall(&mut self) -> Result<()> {
         if self.fallen.is_some() {
-            return Ok(());
+            return;
         }
-        let st = match self.poses {
-            Some(st) => st,
-            None => self.model.body_poses(&self.q)?,
-        };
         let torso_com = self.model.bodies[0].inertia.com_xz_m;
         let top = self
             .model
-            .point_position(&st, 0, [2.0 * torso_com[0], 2.0 * torso_com[1]]);
+            .point_position(st, 0, [2.0 * torso_com[0], 2.0 * torso_com[1]]);
         let what = if st.pose[0].xz_m[1] <= 0.0 || top[1] <= 0.0 {
             Some(FallCause::Torso)
         } else if let Some(side) = SIDES.into_iter().find(|&s| {
@@ -931,7 +1022,6 @@ impl RobotSim {
                 what,
             });
         }
-        Ok(())
     }
 
     /// World displacement of the belt frame: `−v_belt · t` (piecewise, over belt steps) \[m\].
@@ -1201,6 +1291,13 @@ fn validate(c: &RobotSimConfig) -> Result<()> {
             "fall_pitch_limit_rad",
             c.fall_pitch_limit_rad,
             "must be positive",
+        );
+    }
+    if c.dynamics_refresh_substeps == 0 {
+        return bad(
+            "dynamics_refresh_substeps",
+            f64::from(c.dynamics_refresh_substeps),
+            "must be ≥ 1",
         );
     }
     if !(c.stand_half_stance_m.is_finite() && c.stand_half_stance_m >= 0.0) {

@@ -15,6 +15,8 @@ use nalgebra::DMatrix;
 /// Most simultaneous contact points (two point feet).
 pub const MAX_CONTACTS: usize = 2;
 const MAX_ROWS: usize = 2 * MAX_CONTACTS;
+/// Most coordinates that move (the model's capacity).
+pub const MAX_FREE: usize = model::robot::MAX_DOF;
 
 /// Relative Tikhonov term on the contact Schur complement, so that a singular contact
 /// Jacobian (a straight knee with both feet pinned) still gives a (least-squares) answer.
@@ -24,19 +26,25 @@ const SCHUR_REGULARIZATION: f64 = 1e-12;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct NotPositiveDefinite;
 
-/// Preallocated workspace of the reduced constrained dynamics.
+/// Preallocated workspace of the reduced constrained dynamics. The factorizations happen when
+/// `D` or the contacts are loaded; they are kept as explicit inverses of `D_r` and of the
+/// Schur complement, so every projection is a few short matrix-vector products (no serial
+/// substitutions and divisions), which is what the simulator repeats at 10 kHz.
 #[derive(Debug, Clone)]
 pub struct Solver {
     /// Coordinates that move (all but the design joints), ascending.
     free: Vec<usize>,
     /// Cholesky factor L of D_r (row-major, lower triangle used).
     chol: Vec<f64>,
+    /// D_r⁻¹ (row-major), from the factor: every later solve is a product with it, whose
+    /// rows are independent sums instead of the factor's serial substitutions.
+    inverse: Vec<f64>,
     /// Contact Jacobian rows restricted to `free` (row-major, `rows × n_r`).
     jac: Vec<f64>,
     /// D_r⁻¹ Jᵀ, stored as rows (`rows × n_r`).
     y: Vec<f64>,
-    /// Cholesky factor of the Schur complement J D_r⁻¹ Jᵀ.
-    schur: [[f64; MAX_ROWS]; MAX_ROWS],
+    /// Inverse of the (regularized) Schur complement J D_r⁻¹ Jᵀ, from its Cholesky factor.
+    schur_inverse: [[f64; MAX_ROWS]; MAX_ROWS],
     rows: usize,
 }
 
@@ -52,9 +60,10 @@ impl Solver {
         let n = free.len();
         Self {
             chol: vec![0.0; n * n],
+            inverse: vec![0.0; n * n],
             jac: vec![0.0; MAX_ROWS * n],
             y: vec![0.0; MAX_ROWS * n],
-            schur: [[0.0; MAX_ROWS]; MAX_ROWS],
+            schur_inverse: [[0.0; MAX_ROWS]; MAX_ROWS],
             rows: 0,
             free,
         }
@@ -70,7 +79,7 @@ impl Solver {
         self.free.len()
     }
 
-    /// Factor the reduced mass matrix `D_r` of the full `D`.
+    /// Factor and invert the reduced mass matrix `D_r` of the full `D`.
     pub fn factor_mass(&mut self, d: &DMatrix<f64>) -> Result<(), NotPositiveDefinite> {
         let n = self.free.len();
         for (i, &ci) in self.free.iter().enumerate() {
@@ -78,12 +87,20 @@ impl Solver {
                 self.chol[i * n + k] = d[(ci, ck)];
             }
         }
-        cholesky(&mut self.chol, n)
+        cholesky(&mut self.chol, n)?;
+        for i in 0..n {
+            // Column i of D_r⁻¹ is row i (symmetric).
+            let row = &mut self.inverse[i * n..(i + 1) * n];
+            row.fill(0.0);
+            row[i] = 1.0;
+            cholesky_solve(&self.chol, n, row);
+        }
+        Ok(())
     }
 
-    /// `x ← D_r⁻¹ x` in place (`x` in reduced coordinates).
+    /// `x ← D_r⁻¹ x` in place (`x` in reduced coordinates, at most [`MAX_FREE`] of them).
     pub fn solve_mass(&self, x: &mut [f64]) {
-        cholesky_solve(&self.chol, self.free.len(), x);
+        mul_inverse(&self.inverse, self.free.len(), x);
     }
 
     /// Load the Jacobians of `frames` at the body states `st` and factor the Schur complement.
@@ -107,30 +124,32 @@ impl Solver {
                 &mut self.y[r * n..(r + 1) * n],
             );
             y.copy_from_slice(row);
-            cholesky_solve(&self.chol, n, y);
+            mul_inverse(&self.inverse, n, y);
         }
+        // The Schur complement J D_r⁻¹ Jᵀ (row-major, `rows × rows`), regularized.
+        let rows = self.rows;
+        let mut flat = [0.0; MAX_ROWS * MAX_ROWS];
         let mut trace = 0.0;
-        for a in 0..self.rows {
+        for a in 0..rows {
             for b in 0..=a {
                 let v = dot(&self.jac[a * n..(a + 1) * n], &self.y[b * n..(b + 1) * n]);
-                self.schur[a][b] = v;
-                self.schur[b][a] = v;
+                flat[a * rows + b] = v;
+                flat[b * rows + a] = v;
             }
-            trace += self.schur[a][a];
+            trace += flat[a * rows + a];
         }
         let eps = SCHUR_REGULARIZATION * trace.max(f64::MIN_POSITIVE);
-        let mut flat = [0.0; MAX_ROWS * MAX_ROWS];
-        for a in 0..self.rows {
-            for b in 0..self.rows {
-                flat[a * self.rows + b] = self.schur[a][b] + if a == b { eps } else { 0.0 };
-            }
+        for a in 0..rows {
+            flat[a * rows + a] += eps;
         }
         // Positive definite by construction (regularized).
-        let _ = cholesky(&mut flat[..self.rows * self.rows], self.rows);
-        for a in 0..self.rows {
-            for b in 0..self.rows {
-                self.schur[a][b] = flat[a * self.rows + b];
-            }
+        let _ = cholesky(&mut flat[..rows * rows], rows);
+        for a in 0..rows {
+            // Row a of the (symmetric) inverse.
+            let mut e = [0.0; MAX_ROWS];
+            e[a] = 1.0;
+            cholesky_solve(&flat[..rows * rows], rows, &mut e[..rows]);
+            self.schur_inverse[a] = e;
         }
     }
 
@@ -148,14 +167,13 @@ impl Solver {
         let n = self.free.len();
         let mut jw = [0.0; MAX_ROWS];
         self.jacobian_times(w, &mut jw);
-        let mut flat = [0.0; MAX_ROWS * MAX_ROWS];
-        for a in 0..rows {
-            lambda[a] = c[a] - jw[a];
-            for b in 0..rows {
-                flat[a * rows + b] = self.schur[a][b];
-            }
+        let mut residual = [0.0; MAX_ROWS];
+        for ((r, ci), ji) in residual.iter_mut().zip(c).zip(&jw).take(rows) {
+            *r = ci - ji;
         }
-        cholesky_solve(&flat[..rows * rows], rows, &mut lambda[..rows]);
+        for (l, row) in lambda.iter_mut().zip(&self.schur_inverse).take(rows) {
+            *l = dot(&row[..rows], &residual[..rows]);
+        }
         for (r, l) in lambda.iter().enumerate().take(rows) {
             for (wi, yi) in w.iter_mut().zip(&self.y[r * n..(r + 1) * n]) {
                 *wi += yi * l;
@@ -175,6 +193,15 @@ impl Solver {
         for (&r, &c) in reduced.iter().zip(&self.free) {
             full[c] += scale * r;
         }
+    }
+}
+
+/// `x ← A x` in place for a row-major `n × n` matrix `A`, `n ≤ MAX_FREE`.
+fn mul_inverse(a: &[f64], n: usize, x: &mut [f64]) {
+    let mut v = [0.0; MAX_FREE];
+    v[..n].copy_from_slice(&x[..n]);
+    for (xi, row) in x[..n].iter_mut().zip(a.chunks_exact(n)) {
+        *xi = dot(row, &v[..n]);
     }
 }
 
@@ -205,21 +232,21 @@ fn cholesky(a: &mut [f64], n: usize) -> Result<(), NotPositiveDefinite> {
     Ok(())
 }
 
-/// Solve `L Lᵀ x = b` in place.
+/// Solve `L Lᵀ x = b` in place: forward substitution by rows of L, back substitution by
+/// columns of Lᵀ (again rows of L), so both sweep contiguous memory.
 fn cholesky_solve(l: &[f64], n: usize, x: &mut [f64]) {
+    let (l, x) = (&l[..n * n], &mut x[..n]);
     for i in 0..n {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= l[i * n + k] * x[k];
-        }
-        x[i] = s / l[i * n + i];
+        let row = &l[i * n..(i + 1) * n];
+        x[i] = (x[i] - dot(&row[..i], &x[..i])) / row[i];
     }
     for i in (0..n).rev() {
-        let mut s = x[i];
-        for k in i + 1..n {
-            s -= l[k * n + i] * x[k];
+        let row = &l[i * n..(i + 1) * n];
+        x[i] /= row[i];
+        let xi = x[i];
+        for (xk, lik) in x[..i].iter_mut().zip(&row[..i]) {
+            *xk -= lik * xi;
         }
-        x[i] = s / l[i * n + i];
     }
 }
 
