@@ -4,14 +4,13 @@
 //! count (the test harness allocates on its threads meanwhile).
 #![allow(unsafe_code, clippy::unwrap_used)] // the counting allocator must implement GlobalAlloc
 
+mod common;
+
 use core::time::Duration;
 use drivers::a1::{Command, MotorId, Reply};
 use drivers::bus::{MotorBus, MotorSpec};
-use drivers::sim::{LegJoint, RobotSim, RobotSimConfig, SimEvent};
-use drivers::sim_bus::{
-    A1Model, InertiaDampingPlant, JointPlant, RigidJoint, SimBus, SimConfig, SimMotor,
-};
-use model::Side;
+use drivers::sim::{RobotSimConfig, SimEvent};
+use drivers::sim_bus::{A1Model, InertiaDampingPlant, RigidJoint, SimBus, SimConfig, SimMotor};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -87,29 +86,15 @@ fn exchange_allocates_nothing() {
 
 #[test]
 fn exchange_with_the_simulated_robot_allocates_nothing() {
-    let robot = model::design::generate_model(&model::design::DesignLengths::ADAM)
-        .unwrap()
-        .0;
-    let sim = RobotSim::new(&robot, RobotSimConfig::default()).unwrap();
-    let target: Vec<f64> = (0..sim.joint_count())
-        .map(|j| sim.position_rad(j))
-        .collect();
-    let ff = sim.static_torques_nm().unwrap();
-    let knee = sim.joint_index(Side::Left, LegJoint::Knee);
-    let motors = sim.leg_motors(0, 1);
-    let config = SimConfig {
-        control_rate_hz: 1000.0,
-        bitrate_bps: 1_000_000,
-        bus_count: 2,
-        motors: motors.clone(),
-        model: A1Model::default(),
-        seed: 1,
-    };
-    let mut bus = SimBus::new(config, sim).unwrap();
-    let specs: Vec<_> = motors.iter().map(|m| m.spec).collect();
-    bus.configure(&specs).unwrap();
-    bus.activate().unwrap();
-    let mut replies: Vec<_> = specs.iter().map(|s| Reply::zeroed(s.id)).collect();
+    let common::StandingRig {
+        mut bus,
+        motors,
+        target_rad: target,
+        feedforward_nm: ff,
+        knees,
+        mut replies,
+    } = common::standing_rig(RobotSimConfig::default(), 1);
+    let knee = knees[0];
     let mut commands = Vec::with_capacity(motors.len());
     COUNTING.with(|c| c.set(true));
     // Stand for 0.25 s, then lift the left foot for 0.15 s and put it down: held and fresh

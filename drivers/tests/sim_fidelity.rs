@@ -4,12 +4,11 @@
 //! with liftoffs and touchdowns. See `drivers::sim`, "Multi-rate dynamics".
 #![allow(clippy::unwrap_used)]
 
-use core::time::Duration;
-use drivers::a1::{Command, Reply};
-use drivers::bus::MotorBus;
-use drivers::sim::{LegJoint, RobotSim, RobotSimConfig, SimEvent, PENETRATION_TOLERANCE_M};
-use drivers::sim_bus::{A1Model, JointPlant, SimBus, SimConfig};
-use model::Side;
+mod common;
+
+use drivers::a1::Command;
+use drivers::sim::{RobotSimConfig, SimEvent, PENETRATION_TOLERANCE_M};
+use drivers::sim_bus::JointPlant;
 
 /// The state at one control tick: joints \[rad\], torso (x, z) \[m\] and pitch \[rad\].
 struct Sample {
@@ -22,54 +21,23 @@ struct Sample {
 /// gravity feed-forward on the standing pose; marching flexes one knee by 0.35 rad for 0.15 s of
 /// every 0.25 s from 0.25 s on, alternating. Every tick's sample and the touchdown count.
 fn run(dynamics_refresh_substeps: u32, march: bool) -> (Vec<Sample>, usize) {
-    let robot = model::design::generate_model(&model::design::DesignLengths::ADAM)
-        .unwrap()
-        .0;
     let config = RobotSimConfig {
         dynamics_refresh_substeps,
         ..RobotSimConfig::default()
     };
-    let sim = RobotSim::new(&robot, config).unwrap();
-    let target: Vec<f64> = (0..sim.joint_count())
-        .map(|j| sim.position_rad(j))
-        .collect();
-    let ff = sim.static_torques_nm().unwrap();
-    let knees = [Side::Left, Side::Right].map(|s| sim.joint_index(s, LegJoint::Knee));
-    let motors = sim.leg_motors(0, 1);
-    let config = SimConfig {
-        control_rate_hz: 1000.0,
-        bitrate_bps: 1_000_000,
-        bus_count: 2,
-        motors: motors.clone(),
-        model: A1Model::default(),
-        seed: 3,
-    };
-    let mut bus = SimBus::new(config, sim).unwrap();
-    let specs: Vec<_> = motors.iter().map(|m| m.spec).collect();
-    bus.configure(&specs).unwrap();
-    bus.activate().unwrap();
-    let mut replies: Vec<Reply> = motors.iter().map(|m| Reply::zeroed(m.spec.id)).collect();
+    let mut rig = common::standing_rig(config, 3);
     let mut commands: Vec<Command> = Vec::with_capacity(4);
     let mut samples = Vec::with_capacity(1500);
     for k in 0..1500 {
-        commands.clear();
-        let lifted = (k / 250) % 2;
-        for m in &motors {
-            let mut q = target[m.joint];
-            if march && k >= 250 && k % 250 < 150 && m.joint == knees[lifted] {
-                q += 0.35;
-            }
-            commands.push(Command::pd(m.spec.id, q, 0.0, 300.0, 4.0, ff[m.joint]));
-        }
-        bus.exchange(&commands, &mut replies, Duration::from_millis(1))
-            .unwrap();
-        let p = bus.plant();
+        rig.stand_or_march(k, march, &mut commands);
+        let p = rig.bus.plant();
         samples.push(Sample {
             joints_rad: (0..p.joint_count()).map(|j| p.position_rad(j)).collect(),
             torso_xz_m: p.base_position_m(),
             pitch_rad: p.torso_pitch_rad(),
         });
     }
+    let bus = rig.bus;
     let p = bus.plant();
     assert!(p.fallen().is_none(), "{:?}", p.fallen());
     assert!(p.max_penetration_m() <= PENETRATION_TOLERANCE_M);

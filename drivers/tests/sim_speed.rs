@@ -6,58 +6,22 @@
 //! machine shared with other work lowers much less than the wall-clock figure.
 #![allow(clippy::unwrap_used)]
 
-use core::time::Duration;
-use drivers::a1::{Command, Reply};
-use drivers::bus::MotorBus;
-use drivers::sim::{LegJoint, RobotSim, RobotSimConfig};
-use drivers::sim_bus::{A1Model, JointPlant, SimBus, SimConfig};
-use model::Side;
+mod common;
+
+use drivers::a1::Command;
+use drivers::sim::RobotSimConfig;
 use std::time::Instant;
 
 /// Simulated and wall-clock seconds and seconds on a CPU (if known) of one 1.5 s run.
 fn run(march: bool) -> (f64, f64, Option<f64>) {
-    let robot = model::design::generate_model(&model::design::DesignLengths::ADAM)
-        .unwrap()
-        .0;
-    let sim = RobotSim::new(&robot, RobotSimConfig::default()).unwrap();
-    let target: Vec<f64> = (0..sim.joint_count())
-        .map(|j| sim.position_rad(j))
-        .collect();
-    let ff = sim.static_torques_nm().unwrap();
-    let knees = [Side::Left, Side::Right].map(|s| sim.joint_index(s, LegJoint::Knee));
-    let motors = sim.leg_motors(0, 1);
-    let config = SimConfig {
-        control_rate_hz: 1000.0,
-        bitrate_bps: 1_000_000,
-        bus_count: 2,
-        motors: motors.clone(),
-        model: A1Model::default(),
-        seed: 3,
-    };
-    let mut bus = SimBus::new(config, sim).unwrap();
-    let specs: Vec<_> = motors.iter().map(|m| m.spec).collect();
-    bus.configure(&specs).unwrap();
-    bus.activate().unwrap();
-    let mut replies: Vec<Reply> = motors.iter().map(|m| Reply::zeroed(m.spec.id)).collect();
+    let mut rig = common::standing_rig(RobotSimConfig::default(), 3);
     let mut commands: Vec<Command> = Vec::with_capacity(4);
     let start = Instant::now();
     let cpu_start_ns = thread_cpu_ns();
     for k in 0..1500 {
-        commands.clear();
-        // Marching: from 0.25 s on, flex one knee by 0.35 rad for 0.15 s of every 0.25 s,
-        // alternating, with both feet down in between (open loop: a point-foot robot without
-        // balance control tips over after about 1.7 s, so a run stops at 1.5 s).
-        let lifted = (k / 250) % 2;
-        for m in &motors {
-            let mut q = target[m.joint];
-            if march && k >= 250 && k % 250 < 150 && m.joint == knees[lifted] {
-                q += 0.35;
-            }
-            commands.push(Command::pd(m.spec.id, q, 0.0, 300.0, 4.0, ff[m.joint]));
-        }
-        bus.exchange(&commands, &mut replies, Duration::from_millis(1))
-            .unwrap();
+        rig.stand_or_march(k, march, &mut commands);
     }
+    let bus = rig.bus;
     let wall_s = start.elapsed().as_secs_f64();
     let cpu_s = cpu_start_ns
         .zip(thread_cpu_ns())

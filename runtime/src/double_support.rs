@@ -330,34 +330,51 @@ mod tests {
     use super::*;
     use crate::config::LEG_JOINT_NAMES;
     use crate::Setup;
+    use model::robot::Legs;
+
+    /// The shipped robot's double-support kinematics (template: the gait's initial state).
+    struct Fixture {
+        setup: Setup,
+        legs: Legs,
+        q_template: [f64; MAX_DOF],
+        leg_coord: [usize; LEG_SLOTS],
+    }
+
+    impl Fixture {
+        fn new() -> Self {
+            let setup = Setup::shipped().unwrap();
+            let model = &setup.model;
+            let legs = model.legs().unwrap();
+            let q0 = setup.gait.initial_state.clone().unwrap().q;
+            let mut q_template = [0.0; MAX_DOF];
+            q_template[..model.dof()].copy_from_slice(&q0);
+            let mut leg_coord = [0; LEG_SLOTS];
+            for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
+                leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
+            }
+            Self {
+                setup,
+                legs,
+                q_template,
+                leg_coord,
+            }
+        }
+
+        fn geometry(&self) -> Geometry<'_> {
+            Geometry {
+                model: &self.setup.model,
+                legs: &self.legs,
+                dof: self.setup.model.dof(),
+                q_template: &self.q_template,
+                leg_coord: &self.leg_coord,
+            }
+        }
+    }
 
     #[test]
     fn inverse_kinematics_puts_both_feet_where_asked_and_keeps_them_still() {
-        let setup = Setup::shipped().unwrap();
-        let model = &setup.model;
-        let legs = model.legs().unwrap();
-        let dof = model.dof();
-        let nominal = model.nominal_pose().unwrap();
-        let q0 = model
-            .with_design(
-                &nominal,
-                setup.gait.design.thigh_length_m,
-                setup.gait.design.shin_length_m,
-            )
-            .unwrap();
-        let mut q_template = [0.0; MAX_DOF];
-        q_template[..dof].copy_from_slice(&q0);
-        let mut leg_coord = [0; LEG_SLOTS];
-        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
-            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
-        }
-        let g = Geometry {
-            model,
-            legs: &legs,
-            dof,
-            q_template: &q_template,
-            leg_coord: &leg_coord,
-        };
+        let fixture = Fixture::new();
+        let g = fixture.geometry();
         // A bent-knee start; stance Right at the origin, the left foot 0.3 m behind.
         let warm = [0.2, 0.3, 0.2, 0.3];
         let pose = [-0.15, 0.64, 0.05];
@@ -396,24 +413,11 @@ mod tests {
     #[test]
     fn gravity_torques_hold_the_simulated_robot_still_in_double_support() {
         use drivers::sim::{RobotSim, RobotSimConfig};
-        let setup = Setup::shipped().unwrap();
-        let model = &setup.model;
-        let legs = model.legs().unwrap();
-        let dof = model.dof();
-        let q0 = setup.gait.initial_state.clone().unwrap().q;
-        let mut q_template = [0.0; MAX_DOF];
-        q_template[..dof].copy_from_slice(&q0);
-        let mut leg_coord = [0; LEG_SLOTS];
-        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
-            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
-        }
-        let g = Geometry {
-            model,
-            legs: &legs,
-            dof,
-            q_template: &q_template,
-            leg_coord: &leg_coord,
-        };
+        let fixture = Fixture::new();
+        let g = fixture.geometry();
+        let model = &fixture.setup.model;
+        let (dof, leg_coord) = (model.dof(), fixture.leg_coord);
+        let q0 = fixture.q_template[..dof].to_vec();
         // A crouched double-support pose: the right foot at the origin, the left 0.2 m behind.
         let pose = [-0.08, 0.64, 0.03];
         let (leg_q, _) = g
