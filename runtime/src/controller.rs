@@ -555,6 +555,19 @@ fn min_jerk(u: f64) -> (f64, f64) {
     )
 }
 
+/// A minimum-jerk blend weight over phase: 0 at `from`, 1 at `from + span`, at phase `s`; and
+/// its time derivative at phase rate `rate` (0 outside the ramp, or outside the step).
+fn blend_weight(s: f64, from: f64, span: f64, inside: bool, rate: f64) -> (f64, f64) {
+    let u = (s - from) / span;
+    let (b, db_du) = min_jerk(u);
+    let db = if inside && u > 0.0 && u < 1.0 {
+        db_du / span * rate
+    } else {
+        0.0
+    };
+    (b, db)
+}
+
 /// How well the planned initial pitch is known when walking starts from the planned state, rad.
 const PLANNED_PITCH_SIGMA_RAD: f64 = 0.002;
 
@@ -591,11 +604,8 @@ const MIN_JERK_PEAK_RATE: f64 = 1.875;
 #[derive(Clone, Copy, Debug)]
 struct Launch {
     start_t_s: f64,
-    duration_s: f64,
     from: TorsoPose,
     to: TorsoPose,
-    /// Torso speed at the end, m/s (forward).
-    to_speed_mps: f64,
     /// The rear foot relative to the stance foot, m.
     other_foot_xz_m: [f64; 2],
     /// The last joint solution (the next tick's Newton start), model rad.
@@ -615,7 +625,7 @@ struct StartBlend {
 }
 
 /// The braking step of a Stop: a longer step whose touchdown leaves the walking speed inside
-/// what double support can absorb (see [`Controller::lunge_pose`]).
+/// what double support can absorb (see [`braking_touchdown`]).
 #[derive(Clone, Copy, Debug)]
 struct Lunge {
     /// Offset of the outputs (stance hip, stance knee, swing hip, swing knee) at its touchdown
@@ -1063,8 +1073,11 @@ impl Controller {
                     self.launch_requested = false;
                     self.begin_launch(t, &leg_q, &leg_dq);
                 }
-                if self.launch.is_some_and(|l| t - l.start_t_s < l.duration_s) {
-                    self.launch_commands(t, &mut out.commands);
+                if self
+                    .launch
+                    .is_some_and(|l| t - l.start_t_s < LAUNCH_DURATION_S)
+                {
+                    self.launch_commands(t, &leg_q, &leg_dq, &mut out.commands);
                     // The phase is reported (the stance-leg angle), not yet used.
                     let eval = self.walk_references(t, &leg_q, &leg_dq);
                     (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
@@ -1084,7 +1097,8 @@ impl Controller {
                     self.step_start_t_s = t;
                     self.launch = None;
                     self.last_foot = None;
-                    let eval = self.walk_references(t, &leg_q, &leg_dq);
+                    // The same measured phase, now with the blend.
+                    let eval = self.references(eval.phase, eval.phase_rate, eval.foot_height_m);
                     (y_des, dy_des) = (eval.y, eval.dy);
                     (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
                     self.walk_commands(&eval, &mut out.commands);
@@ -1263,10 +1277,8 @@ impl Controller {
             let z = m.pose[1].min((reach * reach - dx * dx).max(0.0).sqrt());
             Launch {
                 start_t_s: t_s,
-                duration_s: LAUNCH_DURATION_S,
                 from: m.pose,
                 to: [x, z, m.pose[2]],
-                to_speed_mps: LAUNCH_SPEED_MPS,
                 other_foot_xz_m: m.other_foot_xz_m,
                 leg_q: *leg_q,
                 correction: [0.0; 3],
@@ -1277,21 +1289,27 @@ impl Controller {
 
     /// The launch's joint targets at `t_s`: both feet held, the torso on its quintic (pitch
     /// and height held), gravity fed forward.
-    fn launch_commands(&mut self, t_s: f64, commands: &mut [JointCommand; SLOTS]) {
+    fn launch_commands(
+        &mut self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+        commands: &mut [JointCommand; SLOTS],
+    ) {
         let Some(mut launch) = self.launch else {
             return;
         };
         let dt = t_s - launch.start_t_s;
         let mut pose = [0.0; 3];
         let mut rate = [0.0; 3];
-        let end_rate = [launch.to_speed_mps, 0.0, 0.0];
+        let end_rate = [LAUNCH_SPEED_MPS, 0.0, 0.0];
         for k in 0..3 {
             (pose[k], rate[k]) = double_support::quintic(
                 launch.from[k],
                 0.0,
                 launch.to[k],
                 end_rate[k],
-                launch.duration_s,
+                LAUNCH_DURATION_S,
                 dt,
             );
         }
@@ -1302,16 +1320,10 @@ impl Controller {
         // targets within a tick.
         let h = (t_s - launch.last_t_s).clamp(0.0, 0.1);
         launch.last_t_s = t_s;
-        let mut lq = [0.0; LEG_SLOTS];
-        let mut ldq = [0.0; LEG_SLOTS];
-        for k in 0..LEG_SLOTS {
-            lq[k] = self.to_model(k, self.motors[k].q_rad);
-            ldq[k] = self.layout.direction[k] * self.motors[k].dq_rad_s;
-        }
         let pitch = self.estimator.pitch_rad();
         let pitch_rate = self.estimator.pitch_rate_rad_s();
         let mut error = [0.0; 3];
-        if let Some(m) = geometry.measure(self.stance, pitch, pitch_rate, &lq, &ldq) {
+        if let Some(m) = geometry.measure(self.stance, pitch, pitch_rate, leg_q, leg_dq) {
             for k in 0..3 {
                 error[k] = pose[k] - m.pose[k];
                 launch.correction[k] += LAUNCH_POSE_KI_PER_S * h * error[k];
@@ -1329,15 +1341,15 @@ impl Controller {
             &launch.leg_q,
         );
         // Out of reach (not on a launch within LAUNCH_REACH_FRACTION): hold the last solution.
-        let (leg_q, leg_dq) = solved.unwrap_or((launch.leg_q, [0.0; LEG_SLOTS]));
+        let (q_des, dq_des) = solved.unwrap_or((launch.leg_q, [0.0; LEG_SLOTS]));
         let ff = geometry
-            .gravity_torques(self.stance, pose, &leg_q)
+            .gravity_torques(self.stance, pose, &q_des)
             .unwrap_or([0.0; LEG_SLOTS]);
-        launch.leg_q = leg_q;
+        launch.leg_q = q_des;
         self.launch = Some(launch);
         for k in 0..LEG_SLOTS {
             let dir = self.layout.direction[k];
-            commands[k] = self.pd(k, self.to_motor(k, leg_q[k]), dir * leg_dq[k], dir * ff[k]);
+            commands[k] = self.pd(k, self.to_motor(k, q_des[k]), dir * dq_des[k], dir * ff[k]);
         }
         self.hold_commands(commands);
     }
@@ -1469,13 +1481,7 @@ impl Controller {
                 } else {
                     START_BLEND_SPAN
                 };
-                let u = (s - blend.from_phase) / span;
-                let (b, db_du) = min_jerk(u);
-                let db = if inside && u > 0.0 && u < 1.0 {
-                    db_du / span * rate
-                } else {
-                    0.0
-                };
+                let (b, db) = blend_weight(s, blend.from_phase, span, inside, rate);
                 y[i] += (1.0 - b) * blend.offset[i];
                 dy[i] -= db * blend.offset[i];
             }
@@ -1484,13 +1490,7 @@ impl Controller {
         // blend into the braking touchdown pose over the second part of the step.
         if self.braking {
             let lunge = &self.lunge;
-            let u = (s - BRAKE_BLEND_FROM) / (1.0 - BRAKE_BLEND_FROM);
-            let (b, db_du) = min_jerk(u);
-            let db = if inside && u > 0.0 && u < 1.0 {
-                db_du / (1.0 - BRAKE_BLEND_FROM) * rate
-            } else {
-                0.0
-            };
+            let (b, db) = blend_weight(s, BRAKE_BLEND_FROM, 1.0 - BRAKE_BLEND_FROM, inside, rate);
             for i in 0..OUTPUTS {
                 y[i] += b * lunge.dy_end[i];
                 dy[i] += db * lunge.dy_end[i];

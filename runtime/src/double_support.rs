@@ -3,7 +3,9 @@
 //! With both point feet down the planar robot keeps three degrees of freedom (torso x, z and
 //! pitch) for four leg motors: a torso pose the legs can reach fixes all four joint angles
 //! (inverse kinematics of two independent two-link legs). The controller uses it to find the
-//! touchdown pose of a Stop's braking step from the gait's first pose.
+//! touchdown pose of a Stop's braking step from the gait's first pose, and for the launch that
+//! starts a walk from Stand: the torso on a [`quintic`], the joints from [`Geometry::solve`],
+//! gravity from [`Geometry::gravity_torques`].
 //!
 //! Frames: positions are world axes `[x, z]`, relative to the stance foot. Everything here
 //! works on fixed-size arrays and never allocates.
@@ -465,6 +467,35 @@ mod tests {
         let limp = speed_after(&torques_for(0.0));
         assert!(held < 1e-3, "held: {held}");
         assert!(limp > 0.1, "limp: {limp}");
+    }
+
+    #[test]
+    fn the_quintic_meets_its_end_conditions_and_its_velocity_is_its_derivative() {
+        let (p0, v0, p1, v1, big_t) = (0.3, -0.7, -0.1, 0.45, 0.8);
+        let at = |t: f64| quintic(p0, v0, p1, v1, big_t, t);
+        assert_eq!(at(0.0), (p0, v0));
+        let (b, db) = at(big_t);
+        assert!(
+            (b - p1).abs() < 1e-12 && (db - v1).abs() < 1e-12,
+            "{b} {db}"
+        );
+        // Clamped outside [0, T].
+        assert_eq!(at(-1.0), at(0.0));
+        assert_eq!(at(2.0), at(big_t));
+        // Zero acceleration at both ends: central differences of the velocity just inside,
+        // extrapolated linearly to the end (the acceleration is linear there up to O(h²);
+        // mid-move it is of order 1 m/s²).
+        let h = 1e-4;
+        let acc = |t: f64| (at(t + h).1 - at(t - h).1) / (2.0 * h);
+        let start = 2.0 * acc(h) - acc(2.0 * h);
+        let end = 2.0 * acc(big_t - h) - acc(big_t - 2.0 * h);
+        assert!(start.abs() < 1e-4 && end.abs() < 1e-4, "{start} {end}");
+        assert!(acc(0.5 * big_t).abs() > 0.1);
+        for k in 1..20 {
+            let t = big_t * f64::from(k) / 20.0;
+            let fd = (at(t + 1e-6).0 - at(t - 1e-6).0) / 2e-6;
+            assert!((fd - at(t).1).abs() < 1e-7, "{t}: {fd} vs {}", at(t).1);
+        }
     }
 
     #[test]
