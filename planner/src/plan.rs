@@ -85,7 +85,7 @@ pub(crate) fn solve_stage(
     config: &PlannerConfig,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<(Vec<f64>, StageReport)> {
-    let attempt = solve_stage_attempt(problem, stage, config, on_progress)?;
+    let attempt = solve_stage_attempt(problem, stage, config, None, on_progress)?;
     attempt.into_result()
 }
 
@@ -99,6 +99,8 @@ pub(crate) struct StageAttempt {
     pub usable: bool,
     /// Why the solver stopped.
     pub status: nlp::SolveStatus,
+    /// The last iterate with its multipliers, to warm-start a neighbouring solve.
+    pub warm_start: nlp::WarmStart,
 }
 
 impl StageAttempt {
@@ -121,10 +123,13 @@ impl StageAttempt {
     }
 }
 
+/// One solve of a stage, from the problem's initial point or from `warm_start` (a point and
+/// multipliers of a neighbouring solve).
 pub(crate) fn solve_stage_attempt(
     problem: &HzdProblem,
     stage: &'static str,
     config: &PlannerConfig,
+    warm_start: Option<nlp::WarmStart>,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<StageAttempt> {
     on_progress(Progress::Stage(stage));
@@ -132,6 +137,7 @@ pub(crate) fn solve_stage_attempt(
         tolerance: config.solver.tolerance,
         constraint_violation_tolerance: 1e-6,
         max_iterations: config.solver.max_iterations,
+        warm_start,
         ..SolveOptions::default()
     };
     let mut callback = |r: &IterationReport| {
@@ -155,6 +161,7 @@ pub(crate) fn solve_stage_attempt(
     let usable = (sol.status.is_success() || (stage == FEASIBILITY && violation < 1e-8))
         && violation <= 1e-5;
     Ok(StageAttempt {
+        warm_start: sol.warm_start(),
         x: sol.x,
         report,
         usable,

@@ -160,16 +160,6 @@ impl ripopt::NlpProblem for Adapter<'_> {
         }
     }
 
-    fn initial_multipliers(&self, lam_g: &mut [f64], z_l: &mut [f64], z_u: &mut [f64]) -> bool {
-        let Some(start) = self.warm_start else {
-            return false;
-        };
-        lam_g.copy_from_slice(&start.constraint_multipliers);
-        z_l.copy_from_slice(&start.lower_bound_multipliers);
-        z_u.copy_from_slice(&start.upper_bound_multipliers);
-        true
-    }
-
     fn objective(&self, x: &[f64], _new_x: bool, obj: &mut f64) -> bool {
         self.timed(
             |c| c.objective += 1,
@@ -226,7 +216,7 @@ impl ripopt::NlpProblem for Adapter<'_> {
     }
 }
 
-fn ripopt_options(options: &SolveOptions) -> ripopt::SolverOptions {
+fn ripopt_options(problem: &dyn NlpProblem, options: &SolveOptions) -> ripopt::SolverOptions {
     let mut out = ripopt::SolverOptions {
         tol: options.tolerance,
         constr_viol_tol: options.constraint_violation_tolerance,
@@ -238,14 +228,122 @@ fn ripopt_options(options: &SolveOptions) -> ripopt::SolverOptions {
         detect_linear_constraints: false,
         ..ripopt::SolverOptions::default()
     };
-    if options.warm_start.is_some() {
+    if let Some(start) = &options.warm_start {
         out.warm_start = true;
         // IPOPT's advice for warm starts: push the start only slightly off the bounds.
         out.warm_start_bound_push = 1e-6;
         out.warm_start_bound_frac = 1e-6;
         out.warm_start_mult_bound_push = 1e-6;
+        // IPOPT pushes a warm start by the warm-start values only; ripopt first applies
+        // `bound_push`/`bound_frac` (1e-2) to every start, which moved an optimal point's slacks
+        // a hundredth off their bounds and cost a re-converged solve (~130 iterations for the
+        // co-design polish). The same 1e-6 for both, as IPOPT does.
+        out.bound_push = out.warm_start_bound_push;
+        out.bound_frac = out.warm_start_bound_frac;
+        // A start point where the problem cannot be evaluated keeps only x; ripopt's own
+        // first evaluation there then reports the domain error.
+        let _ = warm_start_multipliers(problem, start, &mut out);
     }
     out
+}
+
+/// IPOPT's gradient-based scaling factor for a row (or the objective) whose largest
+/// derivative magnitude at the start is `max_abs`: 100 / max_abs when that exceeds 100, at
+/// least 1e-8 (`nlp_scaling_max_gradient`, `nlp_scaling_min_value`, ripopt's defaults).
+fn gradient_scaling(max_abs: f64) -> f64 {
+    const MAX_GRADIENT: f64 = 100.0;
+    const MIN_VALUE: f64 = 1e-8;
+    if max_abs > MAX_GRADIENT && max_abs.is_finite() {
+        (MAX_GRADIENT / max_abs).max(MIN_VALUE)
+    } else {
+        1.0
+    }
+}
+
+/// Hands a warm start's multipliers to ripopt through its options.
+///
+/// ripopt 0.8.2 never sees `NlpProblem::initial_multipliers`: its internal scaling wrapper
+/// does not forward the call, so a warm start used to keep the point and silently restart
+/// every multiplier at 1 (and then centre the barrier parameter on that: μ₀ = 129 from an
+/// optimum). The options path works but takes the multipliers in ripopt's *scaled* space, so
+/// this fixes the scaling itself, the same gradient-based rule ripopt applies at the start
+/// point, passes it as the user scaling, and converts: z → z·s_f, λᵢ → λᵢ·s_f / s_gᵢ, the
+/// slacks of the inequality rows sᵢ = gᵢ(x)·s_gᵢ and their bound multipliers from λ
+/// (IPOPT's λ_d = v_U − v_L).
+fn warm_start_multipliers(
+    problem: &dyn NlpProblem,
+    start: &WarmStart,
+    out: &mut ripopt::SolverOptions,
+) -> std::result::Result<(), DomainError> {
+    let (n, m) = (problem.num_variables(), problem.num_constraints());
+    let x0 = match &start.x {
+        Some(x) => x.clone(),
+        None => {
+            let mut x0 = vec![0.0; n];
+            problem.initial_point(&mut x0);
+            x0
+        }
+    };
+    let mut gradient = vec![0.0; n];
+    problem.gradient(&x0, &mut gradient)?;
+    let obj_scaling = gradient_scaling(gradient.iter().fold(0.0, |a: f64, g| a.max(g.abs())));
+    let pattern = problem.jacobian_structure();
+    let mut jacobian = vec![0.0; pattern.rows.len()];
+    problem.jacobian_values(&x0, &mut jacobian)?;
+    let mut row_max = vec![0.0_f64; m];
+    for (&row, value) in pattern.rows.iter().zip(&jacobian) {
+        if value.is_finite() {
+            row_max[row] = row_max[row].max(value.abs());
+        }
+    }
+    let g_scaling: Vec<f64> = row_max.into_iter().map(gradient_scaling).collect();
+    let mut g = vec![0.0; m];
+    problem.constraints(&x0, &mut g)?;
+    let (mut g_lower, mut g_upper) = (vec![0.0; m], vec![0.0; m]);
+    problem.constraint_bounds(&mut g_lower, &mut g_upper);
+
+    let y: Vec<f64> = (start.constraint_multipliers.iter().zip(&g_scaling))
+        .map(|(&l, &sg)| l * obj_scaling / sg)
+        .collect();
+    let inequality = |i: usize| g_lower[i] != g_upper[i];
+    let push = out.warm_start_mult_bound_push;
+    let side = |i: usize, finite: bool, sign: f64| {
+        if inequality(i) && finite {
+            (sign * y[i]).max(push)
+        } else {
+            0.0
+        }
+    };
+    out.warm_start_v_l = Some(
+        (0..m)
+            .map(|i| side(i, g_lower[i].is_finite(), -1.0))
+            .collect(),
+    );
+    out.warm_start_v_u = Some(
+        (0..m)
+            .map(|i| side(i, g_upper[i].is_finite(), 1.0))
+            .collect(),
+    );
+    out.warm_start_s = Some(g.iter().zip(&g_scaling).map(|(gi, sg)| gi * sg).collect());
+    out.warm_start_z_l = Some(
+        start
+            .lower_bound_multipliers
+            .iter()
+            .map(|z| z * obj_scaling)
+            .collect(),
+    );
+    out.warm_start_z_u = Some(
+        start
+            .upper_bound_multipliers
+            .iter()
+            .map(|z| z * obj_scaling)
+            .collect(),
+    );
+    out.warm_start_y = Some(y);
+    out.bound_mult_init_val = push;
+    out.user_obj_scaling = Some(obj_scaling);
+    out.user_g_scaling = Some(g_scaling);
+    Ok(())
 }
 
 fn map_status(status: ripopt::SolveStatus) -> SolveStatus {
@@ -290,7 +388,7 @@ impl NlpSolver for RipoptSolver {
             evaluation_time: Cell::new(Duration::ZERO),
             counts: Cell::new(EvaluationCounts::default()),
         };
-        let result = ripopt::solve(&adapter, &ripopt_options(options));
+        let result = ripopt::solve(&adapter, &ripopt_options(problem, options));
         adapter.deliver_reports();
         drop(guard);
 

@@ -440,6 +440,40 @@ mod tests {
         assert!((warm.statistics.objective - cold.statistics.objective).abs() < 1e-7);
     }
 
+    /// The multipliers of a warm start reach the backend (ripopt 0.8.2 drops those of its
+    /// `initial_multipliers` hook; the adapter passes them through its options instead). The
+    /// first barrier parameter of a warm start is the average complementarity of the start:
+    /// small from an optimum with its multipliers (it was 2.0 here while they were dropped and
+    /// reset to 1), and the solve ends at the same optimum.
+    #[test]
+    fn warm_start_multipliers_reach_the_solver() {
+        let cold = solve(&hs71(), &SolveOptions::default()).unwrap();
+        let mut first_mu = None;
+        let warm = solve_with_callback(
+            &hs71(),
+            &SolveOptions {
+                warm_start: Some(cold.warm_start()),
+                ..SolveOptions::default()
+            },
+            &mut |r| {
+                first_mu.get_or_insert(r.barrier_parameter);
+                IterationControl::Continue
+            },
+        )
+        .unwrap();
+        let first_mu = first_mu.unwrap();
+        assert!(first_mu < 1e-3, "first μ {first_mu}");
+        assert_eq!(warm.status, SolveStatus::Optimal);
+        assert!((warm.statistics.objective - cold.statistics.objective).abs() < 1e-7);
+        for (w, c) in warm
+            .constraint_multipliers
+            .iter()
+            .zip(&cold.constraint_multipliers)
+        {
+            assert!((w - c).abs() < 1e-5 * c.abs().max(1.0), "λ {w} vs {c}");
+        }
+    }
+
     #[test]
     fn malformed_input_is_rejected_with_a_typed_error() {
         let crossed = DenseAdProblem::new(Hs71 { lower_bound: 6.0 });
