@@ -156,8 +156,14 @@ impl Solver {
     /// `J x` for the loaded contacts (`x` reduced), into `out[..rows]`.
     pub fn jacobian_times(&self, x: &[f64], out: &mut [f64; MAX_ROWS]) {
         let n = self.free.len();
-        for (r, o) in out.iter_mut().enumerate().take(self.rows) {
-            *o = dot(&self.jac[r * n..(r + 1) * n], x);
+        match self.rows {
+            4 => *out = dots::<4>(&self.jac, n, x),
+            2 => out[..2].copy_from_slice(&dots::<2>(&self.jac, n, x)),
+            rows => {
+                for (r, o) in out.iter_mut().enumerate().take(rows) {
+                    *o = dot(&self.jac[r * n..(r + 1) * n], x);
+                }
+            }
         }
     }
 
@@ -181,6 +187,23 @@ impl Solver {
         }
     }
 
+    /// The correction `x = D⁻¹Jᵀλ` with `J x = c` (the smallest in the kinetic-energy metric):
+    /// [`Self::constrain`] from `w = 0`, without its product `J·0`.
+    pub fn correction(&self, c: &[f64; MAX_ROWS], x: &mut [f64]) {
+        let rows = self.rows;
+        let n = self.free.len();
+        let mut lambda = [0.0; MAX_ROWS];
+        for (l, row) in lambda.iter_mut().zip(&self.schur_inverse).take(rows) {
+            *l = dot(&row[..rows], &c[..rows]);
+        }
+        x[..n].fill(0.0);
+        for (r, l) in lambda.iter().enumerate().take(rows) {
+            for (xi, yi) in x.iter_mut().zip(&self.y[r * n..(r + 1) * n]) {
+                *xi += yi * l;
+            }
+        }
+    }
+
     /// Gather full coordinates into reduced ones.
     pub fn gather(&self, full: &[f64], reduced: &mut [f64]) {
         for (r, &c) in reduced.iter_mut().zip(&self.free) {
@@ -200,13 +223,34 @@ impl Solver {
 fn mul_inverse(a: &[f64], n: usize, x: &mut [f64]) {
     let mut v = [0.0; MAX_FREE];
     v[..n].copy_from_slice(&x[..n]);
-    for (xi, row) in x[..n].iter_mut().zip(a.chunks_exact(n)) {
-        *xi = dot(row, &v[..n]);
+    let v = &v[..n];
+    let mut blocks = x[..n].chunks_exact_mut(4);
+    for (xs, rows) in (&mut blocks).zip(a.chunks_exact(4 * n)) {
+        xs.copy_from_slice(&dots::<4>(rows, n, v));
+    }
+    let done = n - blocks.into_remainder().len();
+    for (xi, row) in x[done..n].iter_mut().zip(a[done * n..].chunks_exact(n)) {
+        *xi = dot(row, v);
     }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `[a_0 · x, …, a_{R−1} · x]` for the first `R` rows `a_r` of the row-major `a` (`n` columns):
+/// the rows' sums interleaved, each still in index order from −0 (the same bits as [`dot`] row
+/// by row), so `R` independent chains of additions run at once instead of one after another.
+#[inline]
+fn dots<const R: usize>(a: &[f64], n: usize, x: &[f64]) -> [f64; R] {
+    let a = &a[..R * n];
+    let mut sums = [-0.0; R];
+    for (k, &xk) in x[..n].iter().enumerate() {
+        for (r, sum) in sums.iter_mut().enumerate() {
+            *sum += a[r * n + k] * xk;
+        }
+    }
+    sums
 }
 
 /// In-place Cholesky `A = L Lᵀ` of a row-major `n × n` matrix (lower triangle holds L).
