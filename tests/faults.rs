@@ -379,8 +379,9 @@ fn short_overrun_burst_rides_through() {
 /// back. Rides through. The walker has no speed regulation, but its steps quicken on the faster
 /// belt, so the net drift is small and its sign is not robust: measured at touchdown it ranged
 /// from −0.087 to +0.057 m as the simulator's dynamics refresh interval went from 1 to 20 steps
-/// (−0.021 m with every step exact), and nanometre changes of the touchdown search moved the
-/// default's from −0.015 to +0.061 m. Bounded: less than the belt's extra travel, 0.1 m, either
+/// (−0.021 m with every step exact), nanometre changes of the touchdown search moved the
+/// default's from −0.015 to +0.061 m, and another stream of encoder noise (the Ziggurat
+/// sampler) to −0.011 m. Bounded: less than the belt's extra travel, 0.1 m, either
 /// way.
 #[test]
 fn belt_speed_step_rides_through_and_drifts() {

@@ -67,6 +67,7 @@ pub mod a1;
 pub mod bus;
 pub mod conformance;
 pub mod imu;
+mod noise;
 pub mod sim;
 pub mod sim_bus;
 pub mod socketcan_bus;

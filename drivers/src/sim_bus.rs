@@ -65,6 +65,7 @@ use crate::a1::{
     Reply, Special,
 };
 use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation};
+use crate::noise::gaussian;
 use crate::timing::{bits_to_duration, frame_bits_exact};
 use core::time::Duration;
 use rand::{Rng, SeedableRng};
@@ -652,13 +653,6 @@ impl TickPeriod {
 enum WireFault {
     Lost,
     Corrupted(Corruption),
-}
-
-/// Standard normal sample (Box–Muller), from the seeded generator only.
-fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
 }
 
 /// A [`MotorBus`] over simulated A1 firmware and a [`JointPlant`].
