@@ -70,7 +70,7 @@ fn multi_rate_dynamics_track_the_exact_path() {
     assert!(held > 1, "the default holds the dynamics");
     // Standing is smooth, so the hold's own error shows: measured 4.5e-5° (joints), 9.6e-8 m
     // (torso), 2.8e-5° (pitch); bounded at 4 to 10 times that. Marching has touchdowns and
-    // liftoffs, whose times shift by parts of a step under any perturbation: measured 0.033°,
+    // liftoffs, whose times shift by parts of a step under any perturbation: measured 0.034°,
     // 0.26 mm and 0.038°, the size of the exact path's own change when its step is halved
     // (0.028°, 0.18 mm, 0.032°); bounded by the 0.1° and 1 mm issue #5 asks for (and 0.15° of
     // pitch), 3.0, 3.8 and 3.9 times the measured. (With the Box–Muller encoder noise before the

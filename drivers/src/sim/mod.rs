@@ -75,10 +75,14 @@
 //! # Cost
 //! A step allocates nothing (only the event list, past its first 64 events): kinematics, `D`,
 //! `H`, the contact solve, the projections and the event search use fixed-size arrays or
-//! buffers sized at construction, and the solver keeps
-//! explicit inverses of `D` and of the contact Schur complement so a held step is a few short
-//! matrix-vector products. 75–90 simulated seconds per CPU second standing or marching on a
-//! shared 2-core VM, short of the 100 wanted (README, "Status"; `tests/sim_speed.rs`).
+//! buffers sized at construction. The solver keeps explicit inverses of `D` (`L⁻ᵀL⁻¹` from its
+//! Cholesky factor: `n` divisions) and of the contact Schur complement, so a held step is a few
+//! short matrix-vector products; a step computes the poses alone, and `D`, `H` rotate each body
+//! once. About 130 simulated seconds per second on one core, standing or marching in place,
+//! when the shared 2-core VM leaves it undisturbed: the 100 wanted, with a margin (README,
+//! "Status"; `tests/sim_speed.rs`). By `perf`, the rest goes to the A1 firmware ticks (13 %,
+//! their Ziggurat noise included), the step's kinematics with its sines and cosines (about 15 %),
+//! `D` and `H` (8 %), the contact projections (about 13 %) and the exact CAN frame timing (6 %).
 //!
 //! ```no_run
 //! use drivers::sim::{RobotSim, RobotSimConfig};

@@ -88,13 +88,7 @@ impl Solver {
             }
         }
         cholesky(&mut self.chol, n)?;
-        for i in 0..n {
-            // Column i of D_r⁻¹ is row i (symmetric).
-            let row = &mut self.inverse[i * n..(i + 1) * n];
-            row.fill(0.0);
-            row[i] = 1.0;
-            cholesky_solve(&self.chol, n, row);
-        }
+        inverse_from_cholesky(&self.chol, n, &mut self.inverse);
         Ok(())
     }
 
@@ -144,12 +138,10 @@ impl Solver {
         }
         // Positive definite by construction (regularized).
         let _ = cholesky(&mut flat[..rows * rows], rows);
-        for a in 0..rows {
-            // Row a of the (symmetric) inverse.
-            let mut e = [0.0; MAX_ROWS];
-            e[a] = 1.0;
-            cholesky_solve(&flat[..rows * rows], rows, &mut e[..rows]);
-            self.schur_inverse[a] = e;
+        let mut inverse = [0.0; MAX_ROWS * MAX_ROWS];
+        inverse_from_cholesky(&flat[..rows * rows], rows, &mut inverse[..rows * rows]);
+        for (a, row) in self.schur_inverse.iter_mut().enumerate().take(rows) {
+            row[..rows].copy_from_slice(&inverse[a * rows..(a + 1) * rows]);
         }
     }
 
@@ -276,20 +268,37 @@ fn cholesky(a: &mut [f64], n: usize) -> Result<(), NotPositiveDefinite> {
     Ok(())
 }
 
-/// Solve `L Lᵀ x = b` in place: forward substitution by rows of L, back substitution by
-/// columns of Lᵀ (again rows of L), so both sweep contiguous memory.
-fn cholesky_solve(l: &[f64], n: usize, x: &mut [f64]) {
-    let (l, x) = (&l[..n * n], &mut x[..n]);
-    for i in 0..n {
-        let row = &l[i * n..(i + 1) * n];
-        x[i] = (x[i] - dot(&row[..i], &x[..i])) / row[i];
+/// `A⁻¹ = L⁻ᵀ L⁻¹` into `inverse` (row-major `n × n`, both triangles) from the Cholesky factor
+/// `L` of `A` (row-major, lower triangle), `n ≤ MAX_FREE`: `L⁻¹` by forward substitution with
+/// the reciprocals of its diagonal (`n` divisions in all), then the product, whose entries are
+/// independent sums (LAPACK's `potri`).
+fn inverse_from_cholesky(l: &[f64], n: usize, inverse: &mut [f64]) {
+    let (l, inverse) = (&l[..n * n], &mut inverse[..n * n]);
+    let mut recip = [0.0; MAX_FREE];
+    for (r, i) in recip.iter_mut().zip(0..n) {
+        *r = 1.0 / l[i * n + i];
     }
-    for i in (0..n).rev() {
-        let row = &l[i * n..(i + 1) * n];
-        x[i] /= row[i];
-        let xi = x[i];
-        for (xk, lik) in x[..i].iter_mut().zip(&row[..i]) {
-            *xk -= lik * xi;
+    // L⁻¹ (lower triangle, row-major), a column at a time.
+    let mut l_inv = [0.0; MAX_FREE * MAX_FREE];
+    for j in 0..n {
+        l_inv[j * n + j] = recip[j];
+        for i in j + 1..n {
+            let mut s = 0.0;
+            for k in j..i {
+                s += l[i * n + k] * l_inv[k * n + j];
+            }
+            l_inv[i * n + j] = -s * recip[i];
+        }
+    }
+    // (L⁻ᵀ L⁻¹)_ij = Σ_{k ≥ max(i, j)} L⁻¹_ki L⁻¹_kj.
+    for i in 0..n {
+        for j in i..n {
+            let mut s = 0.0;
+            for k in j..n {
+                s += l_inv[k * n + i] * l_inv[k * n + j];
+            }
+            inverse[i * n + j] = s;
+            inverse[j * n + i] = s;
         }
     }
 }
@@ -401,13 +410,15 @@ mod tests {
     }
 
     #[test]
-    fn cholesky_solves_a_known_system() {
+    fn cholesky_inverts_a_known_matrix() {
         let mut a = [4.0, 2.0, 2.0, 3.0];
         cholesky(&mut a, 2).unwrap();
-        let mut x = [2.0, 1.0];
-        cholesky_solve(&a, 2, &mut x);
-        // [4 2; 2 3] x = [2; 1] → x = [0.5, 0].
-        assert!((x[0] - 0.5).abs() < 1e-15 && x[1].abs() < 1e-15);
+        let mut inverse = [0.0; 4];
+        inverse_from_cholesky(&a, 2, &mut inverse);
+        // [4 2; 2 3]⁻¹ = [3 −2; −2 4] / 8.
+        for (x, want) in inverse.iter().zip([0.375, -0.25, -0.25, 0.5]) {
+            assert!((x - want).abs() < 1e-15, "{inverse:?}");
+        }
         let mut bad = [1.0, 2.0, 2.0, 1.0];
         assert_eq!(cholesky(&mut bad, 2), Err(NotPositiveDefinite));
     }
