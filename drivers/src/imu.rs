@@ -14,7 +14,8 @@
 //! sample: [`ImuError::Timeout`]), a spike (the gyro reads a huge rate) and a frozen output (the
 //! last good sample, repeated with fresh time stamps).
 
-use rand::{Rng, SeedableRng};
+use crate::noise::gaussian;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thiserror::Error;
 
@@ -166,13 +167,6 @@ impl NoisyImu {
                 + self.noise.accel_noise_mps2 * gaussian(&mut self.rng),
         };
     }
-}
-
-/// Standard normal sample (Box–Muller), from the seeded generator only.
-fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
 }
 
 #[cfg(test)]

@@ -27,9 +27,8 @@
 //!                                                                              │
 //! controller ◀── &mut [Reply] ◀── a1::decode_reply ◀── reply frames ◀──────────┘
 //! ```
-//! Nothing in `exchange` allocates with the test plants; with [`sim::RobotSim`] each 10 kHz
-//! step allocates inside `model::PlanarModel::dynamics` (a simulator, not the control tick).
-//! The caller sizes the command and reply slices once.
+//! Nothing in `exchange` allocates, with the test plants or with [`sim::RobotSim`]
+//! (`tests/no_alloc.rs`). The caller sizes the command and reply slices once.
 //!
 //! With `SimBus<RobotSim>`, configure only the four simulated leg motors
 //! ([`sim::RobotSim::leg_motors`]). ADAM's other ten motors (hip yaw/roll, arms) have no joint
@@ -67,6 +66,7 @@ pub mod a1;
 pub mod bus;
 pub mod conformance;
 pub mod imu;
+mod noise;
 pub mod sim;
 pub mod sim_bus;
 pub mod socketcan_bus;

@@ -65,6 +65,7 @@ use crate::a1::{
     Reply, Special,
 };
 use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation};
+use crate::noise::gaussian;
 use crate::timing::{bits_to_duration, frame_bits_exact};
 use core::time::Duration;
 use rand::{Rng, SeedableRng};
@@ -574,12 +575,11 @@ impl Firmware {
         model: &A1Model,
         rng: &mut ChaCha8Rng,
     ) -> f64 {
-        let dt_s = period.dt_s;
-        let per_count = period.joint_rad_per_count;
         let noise = gaussian(rng) * model.encoder_noise_counts;
-        let counts = (q_rad / per_count + noise).round() as i64;
-        self.q_abs_rad = counts as f64 * per_count;
-        let raw_velocity = (counts - self.prev_counts) as f64 * per_count / dt_s;
+        let counts = (q_rad * period.counts_per_joint_rad + noise).round() as i64;
+        self.q_abs_rad = counts as f64 * period.joint_rad_per_count;
+        let raw_velocity =
+            (counts - self.prev_counts) as f64 * period.joint_rad_s_per_count_per_tick;
         self.prev_counts = counts;
         self.dq_filtered_rad_s +=
             period.velocity_filter_gain * (raw_velocity - self.dq_filtered_rad_s);
@@ -604,8 +604,7 @@ impl Firmware {
         self.tau_nm = model.limit_torque_nm(request, dq_rad_s);
 
         // Exact first-order thermal step with the loss held over the tick.
-        let steady_c =
-            model.ambient_c + model.copper_loss_w(self.tau_nm) * model.thermal_resistance_k_per_w;
+        let steady_c = model.ambient_c + self.tau_nm * self.tau_nm * period.heating_k_per_nm2;
         self.temperature_c = steady_c + (self.temperature_c - steady_c) * period.thermal_decay;
         if self.temperature_c >= model.over_temperature_c {
             self.overheated = true;
@@ -627,6 +626,13 @@ struct TickPeriod {
     dt_s: f64,
     /// Encoder resolution at the joint \[rad\].
     joint_rad_per_count: f64,
+    /// Its reciprocal \[1/rad\] (the tick multiplies: no division on its serial path).
+    counts_per_joint_rad: f64,
+    /// A count per tick as a joint speed \[rad/s\].
+    joint_rad_s_per_count_per_tick: f64,
+    /// Steady excess winding temperature per (N·m)² of joint torque \[K/(N·m)²\]: the copper
+    /// loss is quadratic in the torque.
+    heating_k_per_nm2: f64,
     /// Gain of the first-order velocity low-pass over one tick.
     velocity_filter_gain: f64,
     /// Decay of the winding's excess temperature over one tick.
@@ -640,6 +646,9 @@ impl TickPeriod {
         Self {
             dt_s,
             joint_rad_per_count: model.joint_rad_per_count(),
+            counts_per_joint_rad: 1.0 / model.joint_rad_per_count(),
+            joint_rad_s_per_count_per_tick: model.joint_rad_per_count() * model.firmware_rate_hz,
+            heating_k_per_nm2: model.copper_loss_w(1.0) * model.thermal_resistance_k_per_w,
             velocity_filter_gain: 1.0
                 - (-core::f64::consts::TAU * model.velocity_filter_hz * dt_s).exp(),
             thermal_decay: (-dt_s / tau_th).exp(),
@@ -652,13 +661,6 @@ impl TickPeriod {
 enum WireFault {
     Lost,
     Corrupted(Corruption),
-}
-
-/// Standard normal sample (Box–Muller), from the seeded generator only.
-fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
 }
 
 /// A [`MotorBus`] over simulated A1 firmware and a [`JointPlant`].

@@ -68,12 +68,13 @@ fn worst_difference(a: &[Sample], b: &[Sample]) -> (f64, f64, f64) {
 fn multi_rate_dynamics_track_the_exact_path() {
     let held = RobotSimConfig::default().dynamics_refresh_substeps;
     assert!(held > 1, "the default holds the dynamics");
-    // Standing is smooth, so the hold's own error shows: measured 4.6e-5° (joints), 1.1e-7 m
-    // (torso), 3.0e-5° (pitch); bounded at 4 to 9 times that. Marching has touchdowns and
-    // liftoffs, whose times shift by parts of a step under any perturbation: measured 0.054°,
-    // 0.29 mm and 0.054°, the size of the exact path's own change when its step is halved
-    // (0.027°, 0.18 mm, 0.03°); bounded by the 0.1° and 1 mm issue #5 asks for (and 0.15° of
-    // pitch), 1.9, 3.5 and 2.8 times the measured.
+    // Standing is smooth, so the hold's own error shows: measured 4.5e-5° (joints), 9.6e-8 m
+    // (torso), 2.8e-5° (pitch); bounded at 4 to 10 times that. Marching has touchdowns and
+    // liftoffs, whose times shift by parts of a step under any perturbation: measured 0.034°,
+    // 0.26 mm and 0.038°, the size of the exact path's own change when its step is halved
+    // (0.028°, 0.18 mm, 0.032°); bounded by the 0.1° and 1 mm issue #5 asks for (and 0.15° of
+    // pitch), 3.0, 3.8 and 3.9 times the measured. (With the Box–Muller encoder noise before the
+    // Ziggurat: 0.054°, 0.29 mm and 0.054°; the halved step's 0.027°, 0.18 mm, 0.03°.)
     for (march, joint_deg, torso_m, pitch_deg) in
         [(false, 2e-4, 1e-6, 2e-4), (true, 0.1, 1e-3, 0.15)]
     {

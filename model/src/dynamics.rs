@@ -11,9 +11,9 @@
 //! in the world; the impact with the ground is rigid and plastic (the paper's reset map Δ, with the
 //! left/right relabeling in [`PlanarModel::reset_map`]).
 
-use crate::kinematics::BodyStates;
+use crate::kinematics::{rot_sin_cos, BodyStates};
 use crate::linalg::solve_in_place;
-use crate::robot::{BodyInertia, PlanarModel, Side, MAX_DOF};
+use crate::robot::{BodyInertia, PlanarModel, Side, MAX_BODIES, MAX_DOF};
 use crate::{ModelError, Real, Result};
 use nalgebra::{DMatrix, DVector};
 
@@ -164,13 +164,23 @@ impl PlanarModel {
         // Columns of a body's Jacobian: the base, then the joints on its path (≤ MAX_DOF).
         let mut cols = [0usize; MAX_DOF];
         let mut jac = [[0.0f64; MAX_DOF]; 2];
+        // (sin, cos) of each body's pitch, computed once when first needed: the centre of mass,
+        // its bias acceleration and the prismatic columns of the Jacobians all rotate by them.
+        let mut pitch_sin_cos = [None; MAX_BODIES];
+        let mut sin_cos =
+            |c: usize| *pitch_sin_cos[c].get_or_insert_with(|| st.pose[c].pitch_rad.sin_cos());
         for (b, body) in self.bodies.iter().enumerate() {
             let inertia = &body.inertia;
             if inertia.mass_kg == 0.0 && inertia.inertia_yy_kgm2 == 0.0 {
                 continue;
             }
             let m = inertia.mass_kg;
-            let com = self.point_position(st, b, inertia.com_xz_m);
+            // `point_position` and `point_bias_acceleration`, sharing the rotation.
+            let com_offset = rot_sin_cos(sin_cos(b), inertia.com_xz_m);
+            let com = [
+                st.pose[b].xz_m[0] + com_offset[0],
+                st.pose[b].xz_m[1] + com_offset[1],
+            ];
             let mut nc = 0;
             for c in 0..crate::robot::BASE_DOF {
                 cols[nc] = c;
@@ -184,13 +194,23 @@ impl PlanarModel {
                 jac[0][c] = 0.0;
                 jac[1][c] = 0.0;
             }
-            self.point_jacobian_into(st, b, com, |r, c, v| jac[r][c] = v);
-            let bias = self.point_bias_acceleration(st, b, inertia.com_xz_m);
+            self.point_jacobian_with(st, b, com, &mut sin_cos, |r, c, v| jac[r][c] = v);
+            let w2 = st.omega[b] * st.omega[b];
+            let bias = [
+                st.bias_acc_xz[b][0] + -w2 * com_offset[0],
+                st.bias_acc_xz[b][1] + -w2 * com_offset[1],
+            ];
             let f = [m * bias[0], m * (bias[1] + g)];
-            for &i in &cols[..nc] {
+            for (a, &i) in cols[..nc].iter().enumerate() {
                 drift[i] += jac[0][i] * f[0] + jac[1][i] * f[1];
-                for &k in &cols[..nc] {
-                    mass_matrix[(i, k)] += m * (jac[0][i] * jac[0][k] + jac[1][i] * jac[1][k]);
+                // D is symmetric: each pair once (the products commute, so both entries get
+                // the same bits as `dynamics` gives them).
+                for &k in &cols[a..nc] {
+                    let v = m * (jac[0][i] * jac[0][k] + jac[1][i] * jac[1][k]);
+                    mass_matrix[(i, k)] += v;
+                    if k != i {
+                        mass_matrix[(k, i)] += v;
+                    }
                 }
             }
             // Angular Jacobian: 1 on the base pitch, the axis sign on each revolute joint.

@@ -27,7 +27,7 @@ pub fn rot<S: Real>(pitch: S, v: [S; 2]) -> [S; 2] {
 
 /// [`rot`] with `(sin θ, cos θ)` given.
 #[inline]
-fn rot_sin_cos<S: Real>((s, c): (S, S), v: [S; 2]) -> [S; 2] {
+pub(crate) fn rot_sin_cos<S: Real>((s, c): (S, S), v: [S; 2]) -> [S; 2] {
     [c * v[0] + s * v[1], c * v[1] - s * v[0]]
 }
 
@@ -106,10 +106,60 @@ impl PlanarModel {
         Ok(st)
     }
 
-    /// [`Self::body_poses`] written into `st`.
+    /// [`Self::body_poses`] written into `st` (any previous content is overwritten): the pose
+    /// half of [`Self::body_states_into`], the same operations on the poses (the simulator
+    /// calls it every 0.1 ms step).
     pub fn body_poses_into<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) -> Result<()> {
-        let zeros = [S::zero(); MAX_DOF];
-        self.body_states_into(q, &zeros[..q.len().min(MAX_DOF)], st)
+        self.check_len("q", q.len())?;
+        let z = S::zero();
+        let n = self.bodies.len().min(MAX_BODIES);
+        st.len = self.bodies.len();
+        for b in 0..n {
+            st.pose[b] = Pose {
+                xz_m: [z, z],
+                pitch_rad: z,
+            };
+            st.vel_xz[b] = [z, z];
+            st.omega[b] = z;
+            st.bias_acc_xz[b] = [z, z];
+        }
+        st.pose[0] = Pose {
+            xz_m: [q[0], q[1]],
+            pitch_rad: q[2],
+        };
+        let mut sin_cos = [(z, z); MAX_BODIES];
+        sin_cos[0] = q[2].sin_cos();
+        for (b, body) in self.bodies.iter().enumerate().skip(1) {
+            let (Some(p), Some(j)) = (body.parent, body.joint) else {
+                continue;
+            };
+            let joint = &self.joints[j];
+            let qj = q[joint.coordinate];
+            let pp = st.pose[p];
+            let phi = pp.pitch_rad + S::from(body.origin_pitch_rad);
+            let mut d = rot_sin_cos(sin_cos[p], c2(body.origin_xz_m));
+            let pitch = match joint.kind {
+                JointKind::Revolute { axis_sign } => {
+                    let pitch = phi + qj * axis_sign;
+                    sin_cos[b] = pitch.sin_cos();
+                    pitch
+                }
+                JointKind::Prismatic { axis_xz } => {
+                    sin_cos[b] = if body.origin_pitch_rad == 0.0 {
+                        sin_cos[p]
+                    } else {
+                        phi.sin_cos()
+                    };
+                    d = add(d, scale(qj, rot_sin_cos(sin_cos[b], c2(axis_xz))));
+                    phi
+                }
+            };
+            st.pose[b] = Pose {
+                xz_m: add(pp.xz_m, d),
+                pitch_rad: pitch,
+            };
+        }
+        Ok(())
     }
 
     /// Poses, velocities and bias accelerations of every body at (q, q̇). Never allocates.
@@ -243,6 +293,19 @@ impl PlanarModel {
         st: &BodyStates<S>,
         body: usize,
         p: [S; 2],
+        set: impl FnMut(usize, usize, S),
+    ) {
+        self.point_jacobian_with(st, body, p, |c| st.pose[c].pitch_rad.sin_cos(), set);
+    }
+
+    /// [`Self::point_jacobian_into`] with `sin_cos(c)` giving `(sin, cos)` of body `c`'s pitch
+    /// (for a caller that has them already).
+    pub(crate) fn point_jacobian_with<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        p: [S; 2],
+        mut sin_cos: impl FnMut(usize) -> (S, S),
         mut set: impl FnMut(usize, usize, S),
     ) {
         set(0, 0, S::one());
@@ -257,7 +320,7 @@ impl PlanarModel {
                 JointKind::Revolute { axis_sign } => {
                     scale(S::from(axis_sign), perp(sub(p, st.pose[c].xz_m)))
                 }
-                JointKind::Prismatic { axis_xz } => rot(st.pose[c].pitch_rad, c2(axis_xz)),
+                JointKind::Prismatic { axis_xz } => rot_sin_cos(sin_cos(c), c2(axis_xz)),
             };
             set(0, joint.coordinate, col[0]);
             set(1, joint.coordinate, col[1]);

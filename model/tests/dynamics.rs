@@ -394,6 +394,46 @@ fn stance_leg_angle_acceleration_matches_second_order_dual_numbers() {
 }
 
 #[test]
+fn body_poses_equal_the_poses_of_body_states_bit_for_bit() {
+    // `body_poses_into` is the simulator's every-step kinematics, the pose half of
+    // `body_states_into`: the same poses, for f64 and for dual numbers (the planner's).
+    let model = adam();
+    let mut r = rng(12);
+    for _ in 0..50 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 2.0);
+        let full = model.body_states(&q, &dq).expect("states");
+        let poses = model.body_poses(&q).expect("poses");
+        assert_eq!(poses.len, full.len);
+        for b in 0..full.len {
+            let (p, f) = (poses.pose[b], full.pose[b]);
+            assert_eq!(p.pitch_rad.to_bits(), f.pitch_rad.to_bits(), "body {b}");
+            for k in 0..2 {
+                assert_eq!(p.xz_m[k].to_bits(), f.xz_m[k].to_bits(), "body {b}");
+                assert_eq!(poses.vel_xz[b][k], 0.0);
+                assert_eq!(poses.bias_acc_xz[b][k], 0.0);
+            }
+            assert_eq!(poses.omega[b], 0.0);
+        }
+        let q_dual: Vec<Dual64> = q.iter().map(|&v| Dual64::new(v, 1.0)).collect();
+        let dq_dual: Vec<Dual64> = dq.iter().map(|&v| Dual64::from(v)).collect();
+        let full = model.body_states(&q_dual, &dq_dual).expect("states");
+        let poses = model.body_poses(&q_dual).expect("poses");
+        for b in 0..full.len {
+            let (p, f) = (poses.pose[b], full.pose[b]);
+            for (x, y) in [
+                (p.xz_m[0], f.xz_m[0]),
+                (p.xz_m[1], f.xz_m[1]),
+                (p.pitch_rad, f.pitch_rad),
+            ] {
+                assert_eq!(x.re.to_bits(), y.re.to_bits(), "body {b}");
+                assert_eq!(x.eps.to_bits(), y.eps.to_bits(), "body {b}");
+            }
+        }
+    }
+}
+
+#[test]
 fn allocation_free_dynamics_equals_dynamics_bit_for_bit() {
     // `dynamics_into` is the simulator's 10 kHz path; it must be the same computation.
     for model in [

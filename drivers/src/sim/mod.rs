@@ -75,10 +75,14 @@
 //! # Cost
 //! A step allocates nothing (only the event list, past its first 64 events): kinematics, `D`,
 //! `H`, the contact solve, the projections and the event search use fixed-size arrays or
-//! buffers sized at construction, and the solver keeps
-//! explicit inverses of `D` and of the contact Schur complement so a held step is a few short
-//! matrix-vector products. 75–90 simulated seconds per CPU second standing or marching on a
-//! shared 2-core VM, short of the 100 wanted (README, "Status"; `tests/sim_speed.rs`).
+//! buffers sized at construction. The solver keeps explicit inverses of `D` (`L⁻ᵀL⁻¹` from its
+//! Cholesky factor: `n` divisions) and of the contact Schur complement, so a held step is a few
+//! short matrix-vector products; a step computes the poses alone, and `D`, `H` rotate each body
+//! once. About 130 simulated seconds per second on one core, standing or marching in place,
+//! when the shared 2-core VM leaves it undisturbed: the 100 wanted, with a margin (README,
+//! "Status"; `tests/sim_speed.rs`). By `perf`, the rest goes to the A1 firmware ticks (13 %,
+//! their Ziggurat noise included), the step's kinematics with its sines and cosines (about 15 %),
+//! `D` and `H` (8 %), the contact projections (about 13 %) and the exact CAN frame timing (6 %).
 //!
 //! ```no_run
 //! use drivers::sim::{RobotSim, RobotSimConfig};
@@ -354,6 +358,8 @@ pub struct RobotSim {
     stance_bias: [f64; 2 * MAX_CONTACTS],
     /// Foot heights at the end of the last step \[m\] (the touchdown search of a frozen step).
     foot_z_m: [f64; 2],
+    /// Buffer of a step's end poses (always `Some` between steps).
+    pose_scratch: Option<Box<BodyStates<f64>>>,
     /// The robot's weight \[N\].
     weight_n: f64,
     reduced_a: Vec<f64>,
@@ -427,6 +433,7 @@ impl RobotSim {
             refresh_due: true,
             stance_bias: [0.0; 2 * MAX_CONTACTS],
             foot_z_m: [0.0; 2],
+            pose_scratch: Some(Box::new(BodyStates::zeroed())),
             weight_n: model.total_mass_kg() * model.gravity_mps2,
             reduced_a: vec![0.0; nr],
             reduced_b: vec![0.0; nr],
@@ -715,18 +722,38 @@ impl RobotSim {
             self.q[c] += h * self.dq[c];
         }
 
+        // The end-of-step poses go into a buffer kept between steps (1 kB: no copy, no zeroing).
+        let mut poses = self
+            .pose_scratch
+            .take()
+            .unwrap_or_else(|| Box::new(BodyStates::zeroed()));
+        let integrated = self.end_step(h, st.as_ref(), detect_touchdown, &mut poses);
+        self.pose_scratch = Some(poses);
+        integrated
+    }
+
+    /// The rest of a step integrated over `h` from the body states `st` (if evaluated afresh):
+    /// the touchdown search, the stance projection and the end-state checks, with `st1` as
+    /// the buffer of the end poses. Returns the time integrated (see [`Self::sub_step`]).
+    fn end_step(
+        &mut self,
+        h: f64,
+        st: Option<&BodyStates<f64>>,
+        detect_touchdown: bool,
+        st1: &mut BodyStates<f64>,
+    ) -> Result<f64> {
         // Touchdown of a free foot within the step: the earliest one.
-        let mut st1 = self.model.body_poses(&self.q)?;
+        self.model.body_poses_into(&self.q, st1)?;
         let mut first: Option<(usize, f64)> = None;
         for i in 0..2 {
             if !detect_touchdown || self.contact[i] != Contact::Air {
                 continue;
             }
-            let z0 = match &st {
+            let z0 = match st {
                 Some(st) => self.model.frame_position_in(st, self.feet[i])[1],
                 None => self.foot_z_m[i],
             };
-            let z1 = self.model.frame_position_in(&st1, self.feet[i])[1];
+            let z1 = self.model.frame_position_in(st1, self.feet[i])[1];
             if z1 < 0.0 && z1 < z0 {
                 let s = if z0 > 0.0 { z0 / (z0 - z1) } else { 0.0 };
                 if first.is_none_or(|(_, s0)| s < s0) {
@@ -741,19 +768,19 @@ impl RobotSim {
             }
             self.t_s += s * h;
             self.touchdown(i)?;
-            let st = self.model.body_poses(&self.q)?;
-            self.check_end_state(&st);
+            self.model.body_poses_into(&self.q, st1)?;
+            self.check_end_state(st1);
             return Ok(s * h);
         }
         // The multi-rate path projects with the contact operator it integrates with, and keeps
         // the poses from before the projection (which moves the robot by nanometres) for the
         // penetration record, the fall check and the next touchdown search.
         let exact = self.config.dynamics_refresh_substeps == 1;
-        if self.project(Some(&st1), exact)? && exact {
-            st1 = self.model.body_poses(&self.q)?;
+        if self.project(Some(st1), exact)? && exact {
+            self.model.body_poses_into(&self.q, st1)?;
         }
         self.t_s += h;
-        self.check_end_state(&st1);
+        self.check_end_state(st1);
         Ok(h)
     }
 
@@ -975,10 +1002,9 @@ impl RobotSim {
                 c[2 * r + 1] = anchor_xz_m[1] - p[1];
             }
         }
-        let mut lambda = [0.0; 2 * MAX_CONTACTS];
-        self.reduced_b.fill(0.0);
-        self.solver.constrain(&mut self.reduced_b, &c, &mut lambda);
+        self.solver.correction(&c, &mut self.reduced_b);
         self.solver.scatter_add(&self.reduced_b, 1.0, &mut self.q);
+        let mut lambda = [0.0; 2 * MAX_CONTACTS];
         self.solver.gather(&self.dq, &mut self.reduced_b);
         self.solver
             .constrain(&mut self.reduced_b, &[0.0; 2 * MAX_CONTACTS], &mut lambda);
@@ -1000,10 +1026,15 @@ impl RobotSim {
             return;
         }
         let torso_com = self.model.bodies[0].inertia.com_xz_m;
-        let top = self
-            .model
-            .point_position(st, 0, [2.0 * torso_com[0], 2.0 * torso_com[1]]);
-        let what = if st.pose[0].xz_m[1] <= 0.0 || top[1] <= 0.0 {
+        let top_local = [2.0 * torso_com[0], 2.0 * torso_com[1]];
+        let hip_z = st.pose[0].xz_m[1];
+        // The top is within |top_local| of the hip axis: while the hip is higher than that
+        // (1 % margin for rounding), the top is up and its rotation (a sine and cosine every
+        // step) is skipped.
+        let top_reach_sq = top_local[0] * top_local[0] + top_local[1] * top_local[1];
+        let top_down = hip_z * hip_z <= 1.01 * top_reach_sq
+            && self.model.point_position(st, 0, top_local)[1] <= 0.0;
+        let what = if hip_z <= 0.0 || top_down {
             Some(FallCause::Torso)
         } else if let Some(side) = SIDES.into_iter().find(|&s| {
             let knee = self.model.joints[self.legs.side(s).knee].body;

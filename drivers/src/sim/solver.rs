@@ -88,13 +88,7 @@ impl Solver {
             }
         }
         cholesky(&mut self.chol, n)?;
-        for i in 0..n {
-            // Column i of D_r⁻¹ is row i (symmetric).
-            let row = &mut self.inverse[i * n..(i + 1) * n];
-            row.fill(0.0);
-            row[i] = 1.0;
-            cholesky_solve(&self.chol, n, row);
-        }
+        inverse_from_cholesky(&self.chol, n, &mut self.inverse);
         Ok(())
     }
 
@@ -144,20 +138,24 @@ impl Solver {
         }
         // Positive definite by construction (regularized).
         let _ = cholesky(&mut flat[..rows * rows], rows);
-        for a in 0..rows {
-            // Row a of the (symmetric) inverse.
-            let mut e = [0.0; MAX_ROWS];
-            e[a] = 1.0;
-            cholesky_solve(&flat[..rows * rows], rows, &mut e[..rows]);
-            self.schur_inverse[a] = e;
+        let mut inverse = [0.0; MAX_ROWS * MAX_ROWS];
+        inverse_from_cholesky(&flat[..rows * rows], rows, &mut inverse[..rows * rows]);
+        for (a, row) in self.schur_inverse.iter_mut().enumerate().take(rows) {
+            row[..rows].copy_from_slice(&inverse[a * rows..(a + 1) * rows]);
         }
     }
 
     /// `J x` for the loaded contacts (`x` reduced), into `out[..rows]`.
     pub fn jacobian_times(&self, x: &[f64], out: &mut [f64; MAX_ROWS]) {
         let n = self.free.len();
-        for (r, o) in out.iter_mut().enumerate().take(self.rows) {
-            *o = dot(&self.jac[r * n..(r + 1) * n], x);
+        match self.rows {
+            4 => *out = dots::<4>(&self.jac, n, x),
+            2 => out[..2].copy_from_slice(&dots::<2>(&self.jac, n, x)),
+            rows => {
+                for (r, o) in out.iter_mut().enumerate().take(rows) {
+                    *o = dot(&self.jac[r * n..(r + 1) * n], x);
+                }
+            }
         }
     }
 
@@ -181,6 +179,23 @@ impl Solver {
         }
     }
 
+    /// The correction `x = D⁻¹Jᵀλ` with `J x = c` (the smallest in the kinetic-energy metric):
+    /// [`Self::constrain`] from `w = 0`, without its product `J·0`.
+    pub fn correction(&self, c: &[f64; MAX_ROWS], x: &mut [f64]) {
+        let rows = self.rows;
+        let n = self.free.len();
+        let mut lambda = [0.0; MAX_ROWS];
+        for (l, row) in lambda.iter_mut().zip(&self.schur_inverse).take(rows) {
+            *l = dot(&row[..rows], &c[..rows]);
+        }
+        x[..n].fill(0.0);
+        for (r, l) in lambda.iter().enumerate().take(rows) {
+            for (xi, yi) in x.iter_mut().zip(&self.y[r * n..(r + 1) * n]) {
+                *xi += yi * l;
+            }
+        }
+    }
+
     /// Gather full coordinates into reduced ones.
     pub fn gather(&self, full: &[f64], reduced: &mut [f64]) {
         for (r, &c) in reduced.iter_mut().zip(&self.free) {
@@ -200,13 +215,34 @@ impl Solver {
 fn mul_inverse(a: &[f64], n: usize, x: &mut [f64]) {
     let mut v = [0.0; MAX_FREE];
     v[..n].copy_from_slice(&x[..n]);
-    for (xi, row) in x[..n].iter_mut().zip(a.chunks_exact(n)) {
-        *xi = dot(row, &v[..n]);
+    let v = &v[..n];
+    let mut blocks = x[..n].chunks_exact_mut(4);
+    for (xs, rows) in (&mut blocks).zip(a.chunks_exact(4 * n)) {
+        xs.copy_from_slice(&dots::<4>(rows, n, v));
+    }
+    let done = n - blocks.into_remainder().len();
+    for (xi, row) in x[done..n].iter_mut().zip(a[done * n..].chunks_exact(n)) {
+        *xi = dot(row, v);
     }
 }
 
 fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `[a_0 · x, …, a_{R−1} · x]` for the first `R` rows `a_r` of the row-major `a` (`n` columns):
+/// the rows' sums interleaved, each still in index order from −0 (the same bits as [`dot`] row
+/// by row), so `R` independent chains of additions run at once instead of one after another.
+#[inline]
+fn dots<const R: usize>(a: &[f64], n: usize, x: &[f64]) -> [f64; R] {
+    let a = &a[..R * n];
+    let mut sums = [-0.0; R];
+    for (k, &xk) in x[..n].iter().enumerate() {
+        for (r, sum) in sums.iter_mut().enumerate() {
+            *sum += a[r * n + k] * xk;
+        }
+    }
+    sums
 }
 
 /// In-place Cholesky `A = L Lᵀ` of a row-major `n × n` matrix (lower triangle holds L).
@@ -232,20 +268,37 @@ fn cholesky(a: &mut [f64], n: usize) -> Result<(), NotPositiveDefinite> {
     Ok(())
 }
 
-/// Solve `L Lᵀ x = b` in place: forward substitution by rows of L, back substitution by
-/// columns of Lᵀ (again rows of L), so both sweep contiguous memory.
-fn cholesky_solve(l: &[f64], n: usize, x: &mut [f64]) {
-    let (l, x) = (&l[..n * n], &mut x[..n]);
-    for i in 0..n {
-        let row = &l[i * n..(i + 1) * n];
-        x[i] = (x[i] - dot(&row[..i], &x[..i])) / row[i];
+/// `A⁻¹ = L⁻ᵀ L⁻¹` into `inverse` (row-major `n × n`, both triangles) from the Cholesky factor
+/// `L` of `A` (row-major, lower triangle), `n ≤ MAX_FREE`: `L⁻¹` by forward substitution with
+/// the reciprocals of its diagonal (`n` divisions in all), then the product, whose entries are
+/// independent sums (LAPACK's `potri`).
+fn inverse_from_cholesky(l: &[f64], n: usize, inverse: &mut [f64]) {
+    let (l, inverse) = (&l[..n * n], &mut inverse[..n * n]);
+    let mut recip = [0.0; MAX_FREE];
+    for (r, i) in recip.iter_mut().zip(0..n) {
+        *r = 1.0 / l[i * n + i];
     }
-    for i in (0..n).rev() {
-        let row = &l[i * n..(i + 1) * n];
-        x[i] /= row[i];
-        let xi = x[i];
-        for (xk, lik) in x[..i].iter_mut().zip(&row[..i]) {
-            *xk -= lik * xi;
+    // L⁻¹ (lower triangle, row-major), a column at a time.
+    let mut l_inv = [0.0; MAX_FREE * MAX_FREE];
+    for j in 0..n {
+        l_inv[j * n + j] = recip[j];
+        for i in j + 1..n {
+            let mut s = 0.0;
+            for k in j..i {
+                s += l[i * n + k] * l_inv[k * n + j];
+            }
+            l_inv[i * n + j] = -s * recip[i];
+        }
+    }
+    // (L⁻ᵀ L⁻¹)_ij = Σ_{k ≥ max(i, j)} L⁻¹_ki L⁻¹_kj.
+    for i in 0..n {
+        for j in i..n {
+            let mut s = 0.0;
+            for k in j..n {
+                s += l_inv[k * n + i] * l_inv[k * n + j];
+            }
+            inverse[i * n + j] = s;
+            inverse[j * n + i] = s;
         }
     }
 }
@@ -357,13 +410,15 @@ mod tests {
     }
 
     #[test]
-    fn cholesky_solves_a_known_system() {
+    fn cholesky_inverts_a_known_matrix() {
         let mut a = [4.0, 2.0, 2.0, 3.0];
         cholesky(&mut a, 2).unwrap();
-        let mut x = [2.0, 1.0];
-        cholesky_solve(&a, 2, &mut x);
-        // [4 2; 2 3] x = [2; 1] → x = [0.5, 0].
-        assert!((x[0] - 0.5).abs() < 1e-15 && x[1].abs() < 1e-15);
+        let mut inverse = [0.0; 4];
+        inverse_from_cholesky(&a, 2, &mut inverse);
+        // [4 2; 2 3]⁻¹ = [3 −2; −2 4] / 8.
+        for (x, want) in inverse.iter().zip([0.375, -0.25, -0.25, 0.5]) {
+            assert!((x - want).abs() < 1e-15, "{inverse:?}");
+        }
         let mut bad = [1.0, 2.0, 2.0, 1.0];
         assert_eq!(cholesky(&mut bad, 2), Err(NotPositiveDefinite));
     }
