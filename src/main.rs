@@ -23,7 +23,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Walk the shipped gait for 30 s on the simulated treadmill through the CAN codec path,
-    /// log to logs/<timestamp>.mcap, print a summary.
+    /// log to `logs/<timestamp>.mcap`, print a summary.
     Demo,
     /// Walk a gait with the real-time runtime on the simulated robot or on the robot over CAN.
     Run {

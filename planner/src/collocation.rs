@@ -115,7 +115,7 @@ impl Layout {
     fn globals(&self) -> usize {
         self.points() * self.stride
     }
-    /// Index of α[o][j].
+    /// Index of `α[o][j]`.
     pub fn alpha(&self, o: usize, j: usize) -> usize {
         self.globals() + o * (self.degree + 1) + j
     }
