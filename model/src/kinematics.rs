@@ -87,6 +87,23 @@ impl<S: Real> BodyStates<S> {
     }
 }
 
+/// A body's pose from its parent's, and what its velocity needs of the step.
+struct ChildPose<S> {
+    pose: Pose<S>,
+    /// World offset of the body's origin from its parent's, m.
+    offset: [S; 2],
+    /// The joint's motion.
+    motion: ChildMotion<S>,
+}
+
+/// How a body moves on its joint.
+enum ChildMotion<S> {
+    /// Rotation, `axis_sign` ±1.
+    Revolute { axis_sign: f64 },
+    /// Translation along the world direction `axis`.
+    Prismatic { axis: [S; 2] },
+}
+
 impl PlanarModel {
     fn check_len(&self, what: &'static str, v: usize) -> Result<()> {
         if v != self.dof() {
@@ -111,6 +128,20 @@ impl PlanarModel {
     /// calls it every 0.1 ms step).
     pub fn body_poses_into<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) -> Result<()> {
         self.check_len("q", q.len())?;
+        self.reset_states(q, st);
+        let mut sin_cos = [(S::zero(), S::zero()); MAX_BODIES];
+        sin_cos[0] = q[2].sin_cos();
+        for (b, body) in self.bodies.iter().enumerate().skip(1) {
+            let (Some(p), Some(j)) = (body.parent, body.joint) else {
+                continue;
+            };
+            st.pose[b] = self.child_pose(b, p, j, q, st.pose[p], &mut sin_cos).pose;
+        }
+        Ok(())
+    }
+
+    /// Zeroes `st` for this model's bodies and sets the base pose from q.
+    fn reset_states<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) {
         let z = S::zero();
         let n = self.bodies.len().min(MAX_BODIES);
         st.len = self.bodies.len();
@@ -127,39 +158,51 @@ impl PlanarModel {
             xz_m: [q[0], q[1]],
             pitch_rad: q[2],
         };
-        let mut sin_cos = [(z, z); MAX_BODIES];
-        sin_cos[0] = q[2].sin_cos();
-        for (b, body) in self.bodies.iter().enumerate().skip(1) {
-            let (Some(p), Some(j)) = (body.parent, body.joint) else {
-                continue;
-            };
-            let joint = &self.joints[j];
-            let qj = q[joint.coordinate];
-            let pp = st.pose[p];
-            let phi = pp.pitch_rad + S::from(body.origin_pitch_rad);
-            let mut d = rot_sin_cos(sin_cos[p], c2(body.origin_xz_m));
-            let pitch = match joint.kind {
-                JointKind::Revolute { axis_sign } => {
-                    let pitch = phi + qj * axis_sign;
-                    sin_cos[b] = pitch.sin_cos();
-                    pitch
-                }
-                JointKind::Prismatic { axis_xz } => {
-                    sin_cos[b] = if body.origin_pitch_rad == 0.0 {
-                        sin_cos[p]
-                    } else {
-                        phi.sin_cos()
-                    };
-                    d = add(d, scale(qj, rot_sin_cos(sin_cos[b], c2(axis_xz))));
-                    phi
-                }
-            };
-            st.pose[b] = Pose {
-                xz_m: add(pp.xz_m, d),
+    }
+
+    /// Pose of body `b` (parent `p`, joint `j`) from its parent's pose, and (sin, cos) of its
+    /// pitch stored in `sin_cos[b]` (once per distinct pitch: a prismatic joint with no origin
+    /// pitch keeps its parent's). Shared by [`Self::body_poses_into`] and
+    /// [`Self::body_states_into`], which adds the velocities.
+    fn child_pose<S: Real>(
+        &self,
+        b: usize,
+        p: usize,
+        j: usize,
+        q: &[S],
+        parent: Pose<S>,
+        sin_cos: &mut [(S, S); MAX_BODIES],
+    ) -> ChildPose<S> {
+        let body = &self.bodies[b];
+        let joint = &self.joints[j];
+        let qj = q[joint.coordinate];
+        let phi = parent.pitch_rad + S::from(body.origin_pitch_rad);
+        let mut offset = rot_sin_cos(sin_cos[p], c2(body.origin_xz_m));
+        let (pitch, motion) = match joint.kind {
+            JointKind::Revolute { axis_sign } => {
+                let pitch = phi + qj * axis_sign;
+                sin_cos[b] = pitch.sin_cos();
+                (pitch, ChildMotion::Revolute { axis_sign })
+            }
+            JointKind::Prismatic { axis_xz } => {
+                sin_cos[b] = if body.origin_pitch_rad == 0.0 {
+                    sin_cos[p]
+                } else {
+                    phi.sin_cos()
+                };
+                let a = rot_sin_cos(sin_cos[b], c2(axis_xz));
+                offset = add(offset, scale(qj, a));
+                (phi, ChildMotion::Prismatic { axis: a })
+            }
+        };
+        ChildPose {
+            pose: Pose {
+                xz_m: add(parent.xz_m, offset),
                 pitch_rad: pitch,
-            };
+            },
+            offset,
+            motion,
         }
-        Ok(())
     }
 
     /// Poses, velocities and bias accelerations of every body at (q, q̇). Never allocates.
@@ -180,60 +223,27 @@ impl PlanarModel {
         self.check_len("q", q.len())?;
         self.check_len("dq", dq.len())?;
         let z = S::zero();
-        let n = self.bodies.len().min(MAX_BODIES);
-        st.len = self.bodies.len();
-        for b in 0..n {
-            st.pose[b] = Pose {
-                xz_m: [z, z],
-                pitch_rad: z,
-            };
-            st.vel_xz[b] = [z, z];
-            st.omega[b] = z;
-            st.bias_acc_xz[b] = [z, z];
-        }
-        st.pose[0] = Pose {
-            xz_m: [q[0], q[1]],
-            pitch_rad: q[2],
-        };
+        self.reset_states(q, st);
         st.vel_xz[0] = [dq[0], dq[1]];
         st.omega[0] = dq[2];
-        // (sin, cos) of each body's pitch, once per distinct pitch: a prismatic joint with no
-        // origin pitch keeps its parent's.
         let mut sin_cos = [(z, z); MAX_BODIES];
         sin_cos[0] = q[2].sin_cos();
         for (b, body) in self.bodies.iter().enumerate().skip(1) {
             let (Some(p), Some(j)) = (body.parent, body.joint) else {
                 continue;
             };
-            let joint = &self.joints[j];
-            let (qj, dqj) = (q[joint.coordinate], dq[joint.coordinate]);
-            let pp = st.pose[p];
-            let phi = pp.pitch_rad + S::from(body.origin_pitch_rad);
-            let mut d = rot_sin_cos(sin_cos[p], c2(body.origin_xz_m));
+            let child = self.child_pose(b, p, j, q, st.pose[p], &mut sin_cos);
+            let dqj = dq[self.joints[j].coordinate];
+            let d = child.offset;
             let wp = st.omega[p];
-            let mut v = add(st.vel_xz[p], scale(wp, perp(d)));
-            let (pitch, omega, extra_acc) = match joint.kind {
-                JointKind::Revolute { axis_sign } => {
-                    let pitch = phi + qj * axis_sign;
-                    sin_cos[b] = pitch.sin_cos();
-                    (pitch, wp + dqj * axis_sign, [z, z])
-                }
-                JointKind::Prismatic { axis_xz } => {
-                    sin_cos[b] = if body.origin_pitch_rad == 0.0 {
-                        sin_cos[p]
-                    } else {
-                        phi.sin_cos()
-                    };
-                    let a = rot_sin_cos(sin_cos[b], c2(axis_xz));
-                    d = add(d, scale(qj, a));
-                    v = add(add(st.vel_xz[p], scale(wp, perp(d))), scale(dqj, a));
-                    (phi, wp, scale(wp * dqj * 2.0, perp(a)))
+            let v = add(st.vel_xz[p], scale(wp, perp(d)));
+            let (v, omega, extra_acc) = match child.motion {
+                ChildMotion::Revolute { axis_sign } => (v, wp + dqj * axis_sign, [z, z]),
+                ChildMotion::Prismatic { axis: a } => {
+                    (add(v, scale(dqj, a)), wp, scale(wp * dqj * 2.0, perp(a)))
                 }
             };
-            st.pose[b] = Pose {
-                xz_m: add(pp.xz_m, d),
-                pitch_rad: pitch,
-            };
+            st.pose[b] = child.pose;
             st.vel_xz[b] = v;
             st.omega[b] = omega;
             st.bias_acc_xz[b] = add(add(st.bias_acc_xz[p], scale(-(wp * wp), d)), extra_acc);
