@@ -161,37 +161,37 @@ impl Solver {
 
     /// Project: `w ← w + D⁻¹Jᵀλ` with `J w = c` afterwards; writes λ (one per row).
     pub fn constrain(&self, w: &mut [f64], c: &[f64; MAX_ROWS], lambda: &mut [f64; MAX_ROWS]) {
-        let rows = self.rows;
-        let n = self.free.len();
         let mut jw = [0.0; MAX_ROWS];
         self.jacobian_times(w, &mut jw);
         let mut residual = [0.0; MAX_ROWS];
-        for ((r, ci), ji) in residual.iter_mut().zip(c).zip(&jw).take(rows) {
+        for ((r, ci), ji) in residual.iter_mut().zip(c).zip(&jw).take(self.rows) {
             *r = ci - ji;
         }
+        self.add_correction(&residual, w, lambda);
+    }
+
+    /// The correction `x = D⁻¹Jᵀλ` with `J x = c` (the smallest in the kinetic-energy metric):
+    /// [`Self::constrain`] from `w = 0`, without its product `J·0`.
+    pub fn correction(&self, c: &[f64; MAX_ROWS], x: &mut [f64]) {
+        x[..self.free.len()].fill(0.0);
+        self.add_correction(c, x, &mut [0.0; MAX_ROWS]);
+    }
+
+    /// `w ← w + D⁻¹Jᵀλ` with `λ = (J D⁻¹ Jᵀ)⁻¹ residual`, written to `lambda`.
+    fn add_correction(
+        &self,
+        residual: &[f64; MAX_ROWS],
+        w: &mut [f64],
+        lambda: &mut [f64; MAX_ROWS],
+    ) {
+        let rows = self.rows;
+        let n = self.free.len();
         for (l, row) in lambda.iter_mut().zip(&self.schur_inverse).take(rows) {
             *l = dot(&row[..rows], &residual[..rows]);
         }
         for (r, l) in lambda.iter().enumerate().take(rows) {
             for (wi, yi) in w.iter_mut().zip(&self.y[r * n..(r + 1) * n]) {
                 *wi += yi * l;
-            }
-        }
-    }
-
-    /// The correction `x = D⁻¹Jᵀλ` with `J x = c` (the smallest in the kinetic-energy metric):
-    /// [`Self::constrain`] from `w = 0`, without its product `J·0`.
-    pub fn correction(&self, c: &[f64; MAX_ROWS], x: &mut [f64]) {
-        let rows = self.rows;
-        let n = self.free.len();
-        let mut lambda = [0.0; MAX_ROWS];
-        for (l, row) in lambda.iter_mut().zip(&self.schur_inverse).take(rows) {
-            *l = dot(&row[..rows], &c[..rows]);
-        }
-        x[..n].fill(0.0);
-        for (r, l) in lambda.iter().enumerate().take(rows) {
-            for (xi, yi) in x.iter_mut().zip(&self.y[r * n..(r + 1) * n]) {
-                *xi += yi * l;
             }
         }
     }
