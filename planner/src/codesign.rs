@@ -140,7 +140,7 @@ pub fn codesign_from(
             let restarted = HzdProblem::with_codesign(
                 biped,
                 config.clone(),
-                attempt.x.clone(),
+                attempt.solution.x.clone(),
                 true,
                 Some(spec),
             )?;
@@ -159,7 +159,7 @@ pub fn codesign_from(
         } else {
             (problem, attempt)
         };
-        warm = Some((attempt.warm_start.clone(), mass_kg));
+        warm = Some((attempt.solution.warm_start(), mass_kg));
         let (xs, report) = attempt.into_result()?;
         let l = &problem.layout;
         let found = [xs[l.design_var(0)], xs[l.design_var(1)]];

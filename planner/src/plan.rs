@@ -89,18 +89,15 @@ pub(crate) fn solve_stage(
     attempt.into_result()
 }
 
-/// One solve of a stage, successful or not: the last iterate and its report.
+/// One solve of a stage, successful or not: the solver's last iterate with its multipliers
+/// (to warm-start a neighbouring solve) and the stage's report.
 pub(crate) struct StageAttempt {
-    /// The solver's last iterate.
-    pub x: Vec<f64>,
+    /// The solver's outcome.
+    pub solution: nlp::Solution,
     /// Its report.
     pub report: StageReport,
     /// Whether the stage may use it.
     pub usable: bool,
-    /// Why the solver stopped.
-    pub status: nlp::SolveStatus,
-    /// The last iterate with its multipliers, to warm-start a neighbouring solve.
-    pub warm_start: nlp::WarmStart,
 }
 
 impl StageAttempt {
@@ -114,12 +111,12 @@ impl StageAttempt {
                 violation: self.report.violation,
             });
         }
-        Ok((self.x, self.report))
+        Ok((self.solution.x, self.report))
     }
 
     /// The solver stopped at its iteration limit.
     pub fn hit_iteration_limit(&self) -> bool {
-        self.status == nlp::SolveStatus::IterationLimit
+        self.solution.status == nlp::SolveStatus::IterationLimit
     }
 }
 
@@ -161,11 +158,9 @@ pub(crate) fn solve_stage_attempt(
     let usable = (sol.status.is_success() || (stage == FEASIBILITY && violation < 1e-8))
         && violation <= 1e-5;
     Ok(StageAttempt {
-        warm_start: sol.warm_start(),
-        x: sol.x,
+        solution: sol,
         report,
         usable,
-        status: sol.status,
     })
 }
 

@@ -214,3 +214,42 @@ fn a_co_design_solve_out_of_iterations_restarts_from_its_last_iterate() {
         r.design
     );
 }
+
+/// The sweep's 0.25/0.25 m start stalls (objective and infeasibility change by 1e-9 per 50
+/// iterations after ~40): with the shipped config's 1000-iteration limit it is restarted after
+/// `CODESIGN_RESTART_ITERATIONS`, not after 1000, and ends at the sweep's design (439
+/// iterations in all measured, 1139 before the cap).
+#[test]
+fn a_stalled_co_design_solve_is_restarted_after_the_restart_cap() {
+    use planner::codesign::CODESIGN_RESTART_ITERATIONS;
+    let config = PlannerConfig::load(CONFIG).expect("config");
+    assert!(config.solver.max_iterations > CODESIGN_RESTART_ITERATIONS);
+    let r = planner::codesign::codesign_from(
+        &config,
+        "r.urdf",
+        warm_start(),
+        [0.24, 0.25],
+        [0.25, 0.25],
+        &mut |_| {},
+    )
+    .expect("co-design, restarted");
+    let first = &r.outer[0].report;
+    println!("{first:?}");
+    assert_eq!(first.stage, "co-design (restarted)");
+    // The capped solve ran exactly its 300; the restart needed fewer than the cap again.
+    assert!(
+        first.iterations > CODESIGN_RESTART_ITERATIONS
+            && first.iterations < 2 * CODESIGN_RESTART_ITERATIONS,
+        "{first:?}"
+    );
+    assert!(
+        (r.design.thigh_length_m - 0.3488).abs() < 1e-4,
+        "{:?}",
+        r.design
+    );
+    assert!(
+        (r.design.shin_length_m - 0.3500).abs() < 1e-4,
+        "{:?}",
+        r.design
+    );
+}

@@ -267,9 +267,13 @@ fn gradient_scaling(max_abs: f64) -> f64 {
 /// every multiplier at 1 (and then centre the barrier parameter on that: μ₀ = 129 from an
 /// optimum). The options path works but takes the multipliers in ripopt's *scaled* space, so
 /// this fixes the scaling itself, the same gradient-based rule ripopt applies at the start
-/// point, passes it as the user scaling, and converts: z → z·s_f, λᵢ → λᵢ·s_f / s_gᵢ, the
-/// slacks of the inequality rows sᵢ = gᵢ(x)·s_gᵢ and their bound multipliers from λ
-/// (IPOPT's λ_d = v_U − v_L).
+/// point, passes it as the user scaling, and converts: z → z·s_f, λᵢ → λᵢ·s_f / s_gᵢ.
+///
+/// The slacks of the inequality rows and their bound multipliers cannot be warm-started:
+/// ripopt initialises them *after* applying the warm-start options (overwriting
+/// `warm_start_s` / `warm_start_v_l` / `warm_start_v_u`), with `bound_mult_init_val` as the
+/// multipliers. Setting that to the multiplier push starts them small instead of at 1; the
+/// first Newton step then restores the active ones.
 fn warm_start_multipliers(
     problem: &dyn NlpProblem,
     start: &WarmStart,
@@ -297,50 +301,17 @@ fn warm_start_multipliers(
         }
     }
     let g_scaling: Vec<f64> = row_max.into_iter().map(gradient_scaling).collect();
-    let mut g = vec![0.0; m];
-    problem.constraints(&x0, &mut g)?;
-    let (mut g_lower, mut g_upper) = (vec![0.0; m], vec![0.0; m]);
-    problem.constraint_bounds(&mut g_lower, &mut g_upper);
 
-    let y: Vec<f64> = (start.constraint_multipliers.iter().zip(&g_scaling))
-        .map(|(&l, &sg)| l * obj_scaling / sg)
-        .collect();
-    let inequality = |i: usize| g_lower[i] != g_upper[i];
-    let push = out.warm_start_mult_bound_push;
-    let side = |i: usize, finite: bool, sign: f64| {
-        if inequality(i) && finite {
-            (sign * y[i]).max(push)
-        } else {
-            0.0
-        }
-    };
-    out.warm_start_v_l = Some(
-        (0..m)
-            .map(|i| side(i, g_lower[i].is_finite(), -1.0))
+    let scaled =
+        |multipliers: &[f64]| -> Vec<f64> { multipliers.iter().map(|z| z * obj_scaling).collect() };
+    out.warm_start_z_l = Some(scaled(&start.lower_bound_multipliers));
+    out.warm_start_z_u = Some(scaled(&start.upper_bound_multipliers));
+    out.warm_start_y = Some(
+        (start.constraint_multipliers.iter().zip(&g_scaling))
+            .map(|(&l, &sg)| l * obj_scaling / sg)
             .collect(),
     );
-    out.warm_start_v_u = Some(
-        (0..m)
-            .map(|i| side(i, g_upper[i].is_finite(), 1.0))
-            .collect(),
-    );
-    out.warm_start_s = Some(g.iter().zip(&g_scaling).map(|(gi, sg)| gi * sg).collect());
-    out.warm_start_z_l = Some(
-        start
-            .lower_bound_multipliers
-            .iter()
-            .map(|z| z * obj_scaling)
-            .collect(),
-    );
-    out.warm_start_z_u = Some(
-        start
-            .upper_bound_multipliers
-            .iter()
-            .map(|z| z * obj_scaling)
-            .collect(),
-    );
-    out.warm_start_y = Some(y);
-    out.bound_mult_init_val = push;
+    out.bound_mult_init_val = out.warm_start_mult_bound_push;
     out.user_obj_scaling = Some(obj_scaling);
     out.user_g_scaling = Some(g_scaling);
     Ok(())
