@@ -13,7 +13,7 @@
 
 use crate::kinematics::{rot_sin_cos, BodyStates};
 use crate::linalg::solve_in_place;
-use crate::robot::{BodyInertia, PlanarModel, Side, MAX_BODIES, MAX_DOF};
+use crate::robot::{BodyInertia, PlanarModel, Side, MAX_DOF};
 use crate::{ModelError, Real, Result};
 use nalgebra::{DMatrix, DVector};
 
@@ -164,11 +164,9 @@ impl PlanarModel {
         // Columns of a body's Jacobian: the base, then the joints on its path (≤ MAX_DOF).
         let mut cols = [0usize; MAX_DOF];
         let mut jac = [[0.0f64; MAX_DOF]; 2];
-        // (sin, cos) of each body's pitch, computed once when first needed: the centre of mass,
-        // its bias acceleration and the prismatic columns of the Jacobians all rotate by them.
-        let mut pitch_sin_cos = [None; MAX_BODIES];
-        let mut sin_cos =
-            |c: usize| *pitch_sin_cos[c].get_or_insert_with(|| st.pose[c].pitch_rad.sin_cos());
+        // (sin, cos) of each body's pitch, from the kinematics pass: the centre of mass, its bias
+        // acceleration and the prismatic columns of the Jacobians all rotate by them.
+        let sin_cos = |c: usize| st.sin_cos[c];
         for (b, body) in self.bodies.iter().enumerate() {
             let inertia = &body.inertia;
             if inertia.mass_kg == 0.0 && inertia.inertia_yy_kgm2 == 0.0 {
@@ -194,7 +192,7 @@ impl PlanarModel {
                 jac[0][c] = 0.0;
                 jac[1][c] = 0.0;
             }
-            self.point_jacobian_with(st, b, com, &mut sin_cos, |r, c, v| jac[r][c] = v);
+            self.point_jacobian_with(st, b, com, sin_cos, |r, c, v| jac[r][c] = v);
             let w2 = st.omega[b] * st.omega[b];
             let bias = [
                 st.bias_acc_xz[b][0] + -w2 * com_offset[0],
@@ -250,16 +248,37 @@ impl PlanarModel {
         dq: &[S],
         ddq: &[S],
     ) -> Result<DVector<S>> {
-        if ddq.len() != self.dof() {
-            return Err(ModelError::Dimension {
-                what: "ddq",
-                expected: self.dof(),
-                found: ddq.len(),
-            });
-        }
         let mut st = BodyStates::zeroed();
         self.body_states_into(q, dq, &mut st)?;
+        let mut out = DVector::from_element(self.dof(), S::zero());
+        self.inverse_dynamics_in(inertias, &st, ddq, out.as_mut_slice())?;
+        Ok(out)
+    }
+
+    /// [`Self::inverse_dynamics_with`] from body states already computed at (q, q̇) by
+    /// [`Self::body_states_into`], written into `out` (length dof). Never allocates.
+    ///
+    /// The result depends on the states only through relative positions, angular velocities
+    /// and bias accelerations, so it is the same (up to rounding) for states computed with any
+    /// base position and base linear velocity: a caller that needs the base shifted (a pinned
+    /// stance foot at the origin) may pass states computed before the shift.
+    pub fn inverse_dynamics_in<S: Real>(
+        &self,
+        inertias: &[BodyInertia<S>],
+        st: &BodyStates<S>,
+        ddq: &[S],
+        out: &mut [S],
+    ) -> Result<()> {
         let n = self.dof();
+        for (what, len) in [("ddq", ddq.len()), ("inverse dynamics output", out.len())] {
+            if len != n {
+                return Err(ModelError::Dimension {
+                    what,
+                    expected: n,
+                    found: len,
+                });
+            }
+        }
         let z = S::zero();
         let g = S::from(self.gravity_mps2);
         // Angular accelerations are linear in q̈ (no planar bias).
@@ -274,7 +293,7 @@ impl PlanarModel {
                 alpha[b] += ddq[self.joints[j].coordinate] * axis_sign;
             }
         }
-        let mut out = DVector::from_element(n, z);
+        out.fill(z);
         // Reused by every body (only the first nc entries are read): initialising it once
         // matters when S is a wide dual number.
         let mut cols = [(0usize, z, z); crate::robot::MAX_DOF];
@@ -282,12 +301,12 @@ impl PlanarModel {
             if inertia.mass_kg.re() == 0.0 && inertia.inertia_yy_kgm2.re() == 0.0 {
                 continue;
             }
-            let com = self.point_position(&st, b, inertia.com_xz_m);
-            let bias = self.point_bias_acceleration(&st, b, inertia.com_xz_m);
+            let com = self.point_position(st, b, inertia.com_xz_m);
+            let bias = self.point_bias_acceleration(st, b, inertia.com_xz_m);
             // a = J q̈ + J̇ q̇, then f = m (a + g ẑ); generalized force Jᵀ f + J_θᵀ I θ̈.
             let mut a = bias;
             let mut nc = 0;
-            self.point_jacobian_into(&st, b, com, |r, c, v| {
+            self.point_jacobian_into(st, b, com, |r, c, v| {
                 if let Some(e) = cols[..nc].iter_mut().find(|e| e.0 == c) {
                     if r == 0 {
                         e.1 = v
@@ -315,7 +334,7 @@ impl PlanarModel {
                 }
             }
         }
-        Ok(out)
+        Ok(())
     }
 
     /// Kinetic energy ½ Σ (m |v_com|² + I ω²) from the velocity recursion (independent of D), J.

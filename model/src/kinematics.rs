@@ -68,6 +68,9 @@ pub struct BodyStates<S> {
     /// Bias (velocity-product) acceleration of each body origin, m/s²: the origin acceleration
     /// when q̈ = 0. Angular bias accelerations are zero in the plane.
     pub bias_acc_xz: [[S; 2]; MAX_BODIES],
+    /// (sin, cos) of each body's pitch, computed once by the kinematics pass: every point
+    /// position, velocity, bias acceleration and prismatic Jacobian column rotates by them.
+    pub sin_cos: [(S, S); MAX_BODIES],
 }
 
 impl<S: Real> BodyStates<S> {
@@ -83,6 +86,7 @@ impl<S: Real> BodyStates<S> {
             vel_xz: [[z, z]; MAX_BODIES],
             omega: [z; MAX_BODIES],
             bias_acc_xz: [[z, z]; MAX_BODIES],
+            sin_cos: [(z, z); MAX_BODIES],
         }
     }
 }
@@ -129,13 +133,13 @@ impl PlanarModel {
     pub fn body_poses_into<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) -> Result<()> {
         self.check_len("q", q.len())?;
         self.reset_states(q, st);
-        let mut sin_cos = [(S::zero(), S::zero()); MAX_BODIES];
-        sin_cos[0] = q[2].sin_cos();
         for (b, body) in self.bodies.iter().enumerate().skip(1) {
             let (Some(p), Some(j)) = (body.parent, body.joint) else {
                 continue;
             };
-            st.pose[b] = self.child_pose(b, p, j, q, st.pose[p], &mut sin_cos).pose;
+            st.pose[b] = self
+                .child_pose(b, p, j, q, st.pose[p], &mut st.sin_cos)
+                .pose;
         }
         Ok(())
     }
@@ -153,11 +157,13 @@ impl PlanarModel {
             st.vel_xz[b] = [z, z];
             st.omega[b] = z;
             st.bias_acc_xz[b] = [z, z];
+            st.sin_cos[b] = (z, z);
         }
         st.pose[0] = Pose {
             xz_m: [q[0], q[1]],
             pitch_rad: q[2],
         };
+        st.sin_cos[0] = q[2].sin_cos();
     }
 
     /// Pose of body `b` (parent `p`, joint `j`) from its parent's pose, and (sin, cos) of its
@@ -226,13 +232,11 @@ impl PlanarModel {
         self.reset_states(q, st);
         st.vel_xz[0] = [dq[0], dq[1]];
         st.omega[0] = dq[2];
-        let mut sin_cos = [(z, z); MAX_BODIES];
-        sin_cos[0] = q[2].sin_cos();
         for (b, body) in self.bodies.iter().enumerate().skip(1) {
             let (Some(p), Some(j)) = (body.parent, body.joint) else {
                 continue;
             };
-            let child = self.child_pose(b, p, j, q, st.pose[p], &mut sin_cos);
+            let child = self.child_pose(b, p, j, q, st.pose[p], &mut st.sin_cos);
             let dqj = dq[self.joints[j].coordinate];
             let d = child.offset;
             let wp = st.omega[p];
@@ -258,8 +262,7 @@ impl PlanarModel {
         body: usize,
         local_xz: [S; 2],
     ) -> [S; 2] {
-        let p = st.pose[body];
-        add(p.xz_m, rot(p.pitch_rad, local_xz))
+        add(st.pose[body].xz_m, rot_sin_cos(st.sin_cos[body], local_xz))
     }
 
     /// World velocity of a point given in the frame of `body` (needs `body_states` with q̇).
@@ -269,7 +272,7 @@ impl PlanarModel {
         body: usize,
         local_xz: [S; 2],
     ) -> [S; 2] {
-        let r = rot(st.pose[body].pitch_rad, local_xz);
+        let r = rot_sin_cos(st.sin_cos[body], local_xz);
         add(st.vel_xz[body], scale(st.omega[body], perp(r)))
     }
 
@@ -280,7 +283,7 @@ impl PlanarModel {
         body: usize,
         local_xz: [S; 2],
     ) -> [S; 2] {
-        let r = rot(st.pose[body].pitch_rad, local_xz);
+        let r = rot_sin_cos(st.sin_cos[body], local_xz);
         let w = st.omega[body];
         add(st.bias_acc_xz[body], scale(-(w * w), r))
     }
@@ -305,7 +308,7 @@ impl PlanarModel {
         p: [S; 2],
         set: impl FnMut(usize, usize, S),
     ) {
-        self.point_jacobian_with(st, body, p, |c| st.pose[c].pitch_rad.sin_cos(), set);
+        self.point_jacobian_with(st, body, p, |c| st.sin_cos[c], set);
     }
 
     /// [`Self::point_jacobian_into`] with `sin_cos(c)` giving `(sin, cos)` of body `c`'s pitch

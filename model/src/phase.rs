@@ -74,23 +74,44 @@ impl PlanarModel {
     ) -> Result<AngleDerivatives<S>> {
         let mut st = BodyStates::zeroed();
         self.body_states_into(q, dq, &mut st)?;
+        self.stance_leg_angle_derivatives_in(&st, ddq, legs, stance)
+    }
+
+    /// [`Self::stance_leg_angle_derivatives`] from body states already computed at (q, q̇) by
+    /// [`Self::body_states_into`]. Only hip-to-foot differences enter, so states computed with
+    /// any base position and base linear velocity (and q̈ with any base linear acceleration)
+    /// give the same angle and derivatives up to rounding. Never allocates.
+    pub fn stance_leg_angle_derivatives_in<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        ddq: &[S],
+        legs: &Legs,
+        stance: Side,
+    ) -> Result<AngleDerivatives<S>> {
+        if ddq.len() != self.dof() {
+            return Err(crate::ModelError::Dimension {
+                what: "ddq",
+                expected: self.dof(),
+                found: ddq.len(),
+            });
+        }
         let leg = legs.side(stance);
         let hip_body = self.joints[leg.hip].body;
-        let foot = self.frame_position_in(&st, leg.foot);
+        let foot = self.frame_position_in(st, leg.foot);
         let hip = st.pose[hip_body].xz_m;
         let acc = |body: usize, p: [S; 2], bias: [S; 2]| {
             let mut a = bias;
-            self.point_jacobian_into(&st, body, p, |r, c, v| a[r] += v * ddq[c]);
+            self.point_jacobian_into(st, body, p, |r, c, v| a[r] += v * ddq[c]);
             a
         };
         let a_hip = acc(hip_body, hip, st.bias_acc_xz[hip_body]);
         let a_foot = acc(
             self.frames[leg.foot].body,
             foot,
-            self.frame_bias_acceleration_in(&st, leg.foot),
+            self.frame_bias_acceleration_in(st, leg.foot),
         );
         let v_hip = st.vel_xz[hip_body];
-        let v_foot = self.frame_velocity_in(&st, leg.foot);
+        let v_foot = self.frame_velocity_in(st, leg.foot);
         let r = [hip[0] - foot[0], hip[1] - foot[1]];
         let v = [v_hip[0] - v_foot[0], v_hip[1] - v_foot[1]];
         let a = [a_hip[0] - a_foot[0], a_hip[1] - a_foot[1]];

@@ -468,3 +468,69 @@ fn allocation_free_dynamics_equals_dynamics_bit_for_bit() {
         assert!(model.dynamics_into(&st, &mut d, &mut wrong).is_err());
     }
 }
+
+#[test]
+fn inverse_dynamics_and_stance_angle_from_states_of_a_shifted_base_are_the_pinned_ones() {
+    // The planner evaluates inverse dynamics and the stance-leg angle from one kinematics pass
+    // with the floating base at rest at the origin, and only sets the base acceleration. That
+    // is sound only if they depend on relative positions alone: states computed at another base
+    // position and base linear velocity must give the same result to rounding.
+    let model = adam();
+    let legs = model.legs().expect("biped");
+    let inertias = model.inertias::<f64>();
+    let mut r = rng(13);
+    for _ in 0..50 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 3.0);
+        let ddq = random_dq(&model, &mut r, 20.0);
+        let expected = model.inverse_dynamics(&q, &dq, &ddq).expect("id");
+        let angle = model
+            .stance_leg_angle_derivatives(&q, &dq, &ddq, &legs, Side::Right)
+            .expect("angle");
+        let (mut q0, mut dq0) = (q.clone(), dq.clone());
+        q0[0] = 0.0;
+        q0[1] = 0.0;
+        dq0[0] = 0.0;
+        dq0[1] = 0.0;
+        let mut st = model::kinematics::BodyStates::zeroed();
+        model.body_states_into(&q0, &dq0, &mut st).expect("states");
+        let mut out = vec![0.0; model.dof()];
+        model
+            .inverse_dynamics_in(&inertias, &st, &ddq, &mut out)
+            .expect("id from states");
+        let err = rel_diff(&out, expected.as_slice());
+        assert!(err < 1e-13, "inverse dynamics differs by {err} (relative)");
+        // The stance-leg angle also ignores the base's linear acceleration.
+        let mut ddq0 = ddq.clone();
+        ddq0[0] = 0.0;
+        ddq0[1] = 0.0;
+        let a = model
+            .stance_leg_angle_derivatives_in(&st, &ddq0, &legs, Side::Right)
+            .expect("angle from states");
+        for (x, y) in [
+            (a.theta, angle.theta),
+            (a.rate, angle.rate),
+            (a.accel, angle.accel),
+        ] {
+            assert!((x - y).abs() < 1e-12 * y.abs().max(1.0), "{x} vs {y}");
+        }
+        // The stored (sin, cos) are those of each body's pitch.
+        for b in 0..st.len {
+            let (s, c) = st.sin_cos[b];
+            let (s0, c0) = st.pose[b].pitch_rad.sin_cos();
+            assert_eq!(
+                (s.to_bits(), c.to_bits()),
+                (s0.to_bits(), c0.to_bits()),
+                "body {b}"
+            );
+        }
+    }
+    // Wrong lengths are errors, not panics.
+    let st = model
+        .body_states(&vec![0.0; model.dof()], &vec![0.0; model.dof()])
+        .expect("st");
+    let mut short = vec![0.0; model.dof() - 1];
+    assert!(model
+        .inverse_dynamics_in(&inertias, &st, &vec![0.0; model.dof()], &mut short)
+        .is_err());
+}

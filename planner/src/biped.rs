@@ -8,7 +8,7 @@
 use crate::{PlannerError, Result};
 use model::gait::OutputDefinition;
 use model::kinematics::BodyStates;
-use model::robot::{JointRole, Legs};
+use model::robot::{JointRole, Legs, MAX_DOF};
 use model::{PlanarModel, Real, Side};
 
 /// A planar biped prepared for planning.
@@ -165,6 +165,43 @@ impl PlanarBiped {
             ddq[k] = -a[k];
         }
         Ok([q, dq, ddq])
+    }
+
+    /// The body states at the reduced state (q_r, q̇_r), with the design joints set as in
+    /// [`Self::full_state_design`] but the floating base at rest at the origin (base x, z and
+    /// their rates zero): one kinematics pass, no allocation. Anything that depends only on
+    /// relative positions, angular rates and bias accelerations (inverse dynamics, point
+    /// Jacobians, one point relative to another) is the pinned robot's, up to rounding.
+    pub fn states_at_rest_base<S: Real>(
+        &self,
+        qr: &[S],
+        dqr: &[S],
+        design: Option<[S; 2]>,
+        st: &mut BodyStates<S>,
+    ) -> Result<()> {
+        let n = self.model.dof();
+        let z = S::zero();
+        let (mut q, mut dq) = ([z; MAX_DOF], [z; MAX_DOF]);
+        for (i, &c) in self.reduced.iter().enumerate() {
+            q[c] = qr[i];
+            dq[c] = dqr[i];
+        }
+        for &(c, v) in &self.design {
+            q[c] = S::from(v);
+        }
+        if let Some([thigh, shin]) = design {
+            for side in [Side::Left, Side::Right] {
+                let leg = self.legs.side(side);
+                if let Some(j) = leg.thigh_design {
+                    q[self.model.joints[j].coordinate] = thigh;
+                }
+                if let Some(j) = leg.shin_design {
+                    q[self.model.joints[j].coordinate] = shin;
+                }
+            }
+        }
+        self.model.body_states_into(&q[..n], &dq[..n], st)?;
+        Ok(())
     }
 
     /// The stance-foot Jacobian's column `c` (x and z rows) at full q.

@@ -63,13 +63,22 @@ pub struct CodesignResult {
     pub wall_time_s: f64,
 }
 
-/// Iterations a co-design solve gets before it is restarted from its last iterate. In the 5×5
-/// sweep 24 runs need 138–156 iterations in all (co-design and polish); the 25th, from
-/// 0.25/0.25 m, stalls: after ~40 iterations objective and infeasibility change by 1e-9 per 50
-/// iterations at μ = 1.5e-4. It used to crawl to the config's 1000-iteration limit first (a
-/// third of the sweep's CPU time); restarted after 300 it ends at the same design, 439
-/// iterations in all instead of 1139.
+/// Iterations a co-design solve gets before it is restarted from its last iterate (a
+/// backstop: a solve that stops moving is restarted earlier, by [`CODESIGN_STALL`]). In the 5×5
+/// sweep 24 runs need 138–156 iterations in all (co-design and polish).
 pub const CODESIGN_RESTART_ITERATIONS: usize = 300;
+
+/// When a co-design solve counts as stalled and is restarted from its last iterate. The sweep's
+/// 0.25/0.25 m start stalls after ~45 iterations (steps of 3e-9 m-or-rad, violation frozen at
+/// 2.1e-2, objective moving by 2e-12 per iteration at μ = 1.5e-4); it used to crawl to the
+/// config's 1000-iteration limit (1139 iterations in all), then to the 300-iteration cap (439).
+/// Ten standing iterations are far more than a healthy solve ever shows: near convergence the
+/// violation is below the threshold, and far from it the steps are not 1e-7 small.
+pub const CODESIGN_STALL: plan::StallGuard = plan::StallGuard {
+    step_norm: 1e-7,
+    iterations: 10,
+    infeasibility: 1e-4,
+};
 
 /// Co-designs the thigh and shin lengths with the gait, starting from `config.codesign`'s
 /// initial lengths: plans the gait at that design first (the warm start), then
@@ -98,6 +107,27 @@ pub fn codesign_from(
     initial: &PlannedGait,
     model_lengths: [f64; 2],
     start_lengths: [f64; 2],
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<CodesignResult> {
+    codesign_run(
+        config,
+        urdf_ref,
+        initial,
+        [model_lengths, start_lengths],
+        true,
+        on_progress,
+    )
+}
+
+/// [`codesign_from`], with the gait's feed-forward table (the closed-loop orbit's torques, a
+/// runtime input) computed only if `feedforward`: the convergence study reports designs and
+/// costs and writes no gait file, and the orbit simulation was 4 % of its CPU time.
+fn codesign_run(
+    config: &PlannerConfig,
+    urdf_ref: &str,
+    initial: &PlannedGait,
+    [model_lengths, start_lengths]: [[f64; 2]; 2],
+    feedforward: bool,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<CodesignResult> {
     let start = Instant::now();
@@ -132,11 +162,13 @@ pub fn codesign_from(
             .solver
             .max_iterations
             .min(CODESIGN_RESTART_ITERATIONS);
-        let attempt = plan::solve_stage_attempt(&problem, "co-design", &capped, None, on_progress)?;
-        // A solve that ran out of iterations is restarted once from its last iterate (the
-        // barrier parameter starts afresh; the initial design of the run is unchanged), with
-        // the config's whole iteration limit.
-        let (problem, attempt) = if attempt.hit_iteration_limit() {
+        let stall = Some(CODESIGN_STALL);
+        let attempt =
+            plan::solve_stage_attempt(&problem, "co-design", &capped, None, stall, on_progress)?;
+        // A solve that stalled or ran out of iterations is restarted once from its last iterate
+        // (the barrier parameter starts afresh; the initial design of the run is unchanged),
+        // with the config's whole iteration limit.
+        let (problem, attempt) = if attempt.stalled || attempt.hit_iteration_limit() {
             let restarted = HzdProblem::with_codesign(
                 biped,
                 config.clone(),
@@ -149,6 +181,7 @@ pub fn codesign_from(
                 "co-design (restarted)",
                 config,
                 None,
+                stall,
                 on_progress,
             )?;
             // Report both solves together: iterations and times are the run's.
@@ -200,8 +233,9 @@ pub fn codesign_from(
         }
         start
     });
-    let (xf, report) = plan::solve_stage_attempt(&problem, "polish", config, resume, on_progress)?
-        .into_result()?;
+    let (xf, report) =
+        plan::solve_stage_attempt(&problem, "polish", config, resume, None, on_progress)?
+            .into_result()?;
     let mut gait = plan::gait_from_solution(
         &problem,
         &xf,
@@ -209,11 +243,13 @@ pub fn codesign_from(
         &urdf,
         std::slice::from_ref(&report),
     )?;
-    gait.feedforward = Some(crate::verify::feedforward_from_orbit(
-        &model,
-        &gait,
-        crate::verify::VerifyOptions::default(),
-    )?);
+    if feedforward {
+        gait.feedforward = Some(crate::verify::feedforward_from_orbit(
+            &model,
+            &gait,
+            crate::verify::VerifyOptions::default(),
+        )?);
+    }
     let size = (problem.layout.len(), nlp_constraints(&problem));
     let planned = PlannedGait {
         gait,
@@ -327,12 +363,12 @@ pub fn sweep(
         .par_iter()
         .map(|&start| {
             let t0 = Instant::now();
-            let outcome = codesign_from(
+            let outcome = codesign_run(
                 config,
                 "robot.urdf",
                 initial,
-                model_lengths,
-                start,
+                [model_lengths, start],
+                false,
                 &mut |_| {},
             )
             .map(|r| {

@@ -46,6 +46,7 @@ use crate::nlp::{DomainError, NlpProblem, SparsityPattern};
 use model::bezier;
 use model::kinematics::BodyStates;
 use model::num_dual::{Dual, Dual64, HyperDual, HyperDual64};
+use model::robot::MAX_DOF;
 use model::Real;
 use std::collections::HashMap;
 
@@ -58,6 +59,28 @@ pub const TORQUE_SCALE: f64 = 10.0;
 /// ([`Lanes`]): bit for bit the one-seed-per-evaluation results, with the kinematics and the
 /// bookkeeping of an evaluation shared by this many seeds.
 const SEED_LANES: usize = 4;
+
+/// Working memory of one block evaluation, reused across the seed passes of a derivative sweep.
+struct Scratch<S> {
+    /// Body states of the evaluation's kinematics pass.
+    st: BodyStates<S>,
+    /// Mass properties of each body (the first `bodies.len()`).
+    inertias: [model::robot::BodyInertia<S>; model::robot::MAX_BODIES],
+}
+
+impl<S: Real> Scratch<S> {
+    fn new() -> Self {
+        let z = S::zero();
+        Self {
+            st: BodyStates::zeroed(),
+            inertias: [model::robot::BodyInertia {
+                mass_kg: z,
+                com_xz_m: [z, z],
+                inertia_yy_kgm2: z,
+            }; model::robot::MAX_BODIES],
+        }
+    }
+}
 
 /// Where each variable lives in x.
 #[derive(Clone, Debug)]
@@ -684,26 +707,35 @@ impl HzdProblem {
     }
 
     /// Body mass properties at the lengths of a model block's local variables: the cubic fits
-    /// for thighs and shins under exact coupling, the model's own otherwise.
-    fn inertias_of<S: Real>(&self, kind: Kind, z: &[S]) -> Vec<model::robot::BodyInertia<S>> {
-        let base = || self.biped.model.inertias::<S>();
-        let Some(d) = self.design.as_ref().filter(|d| d.spec.exact_inertia) else {
-            return base();
+    /// for thighs and shins under exact coupling, the model's own otherwise. Written into a
+    /// caller's fixed array (no allocation or copy per evaluation); the first `bodies.len()`
+    /// entries are set.
+    fn inertias_of<S: Real>(
+        &self,
+        kind: Kind,
+        z: &[S],
+        all: &mut [model::robot::BodyInertia<S>; model::robot::MAX_BODIES],
+    ) {
+        let lift = |i: &model::robot::BodyInertia<f64>| model::robot::BodyInertia {
+            mass_kg: S::from(i.mass_kg),
+            com_xz_m: [S::from(i.com_xz_m[0]), S::from(i.com_xz_m[1])],
+            inertia_yy_kgm2: S::from(i.inertia_yy_kgm2),
         };
-        if !Self::uses_model(kind) {
-            return base();
+        let design = self
+            .design
+            .as_ref()
+            .filter(|d| d.spec.exact_inertia && Self::uses_model(kind));
+        let Some(d) = design else {
+            for (a, b) in all.iter_mut().zip(&self.biped.model.bodies) {
+                *a = lift(&b.inertia);
+            }
+            return;
+        };
+        for (a, i) in all.iter_mut().zip(&d.base) {
+            *a = lift(i);
         }
         let n = z.len();
         let (lt, ls) = (z[n - 2], z[n - 1]);
-        let mut all: Vec<model::robot::BodyInertia<S>> = d
-            .base
-            .iter()
-            .map(|i| model::robot::BodyInertia {
-                mass_kg: S::from(i.mass_kg),
-                com_xz_m: [S::from(i.com_xz_m[0]), S::from(i.com_xz_m[1])],
-                inertia_yy_kgm2: S::from(i.inertia_yy_kgm2),
-            })
-            .collect();
         let link = |fit: &model::design::LinkFit, len: S| model::robot::BodyInertia {
             mass_kg: fit.mass_kg.eval(len),
             com_xz_m: [S::zero(), -fit.com_distance_m.eval(len)],
@@ -715,11 +747,25 @@ impl HzdProblem {
         for &b in &d.shin_bodies {
             all[b] = link(&d.fits.shin, ls);
         }
-        all
     }
 
-    /// Evaluates one block at local variables `z`.
+    /// Evaluates one block at local variables `z` (set-up and tests; the solve loop reuses one
+    /// [`Scratch`] per block and derivative sweep through [`Self::eval_block_in`]).
     fn eval_block<S: Real>(&self, kind: Kind, z: &[S], out: &mut [S]) -> Result<(), DomainError> {
+        self.eval_block_in(kind, z, out, &mut Scratch::new())
+    }
+
+    /// Evaluates one block at local variables `z`, with `scratch` for the body states and mass
+    /// properties (wide dual numbers make these tens of kilobytes: zeroing them once per block
+    /// instead of once per seed pass matters).
+    fn eval_block_in<S: Real>(
+        &self,
+        kind: Kind,
+        z: &[S],
+        out: &mut [S],
+        scratch: &mut Scratch<S>,
+    ) -> Result<(), DomainError> {
+        let Scratch { st, inertias } = scratch;
         let design = self.design_joints_of(kind, z);
         let bp = &self.biped;
         let l = &self.layout;
@@ -728,18 +774,40 @@ impl HzdProblem {
         let mu = g.friction_coefficient;
         match kind {
             Kind::Dynamics => {
+                // One kinematics pass with the base at rest at the origin: inverse dynamics
+                // and the stance-foot Jacobian depend only on relative positions, so they are
+                // those of the pinned robot once the base acceleration keeps the foot still.
                 let (qr, dqr) = (&z[..nq], &z[nq..2 * nq]);
-                let ddqr: Vec<S> = z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect();
                 let us = &z[3 * nq..3 * nq + nu];
-                let [q, dq, ddq] = bp
-                    .full_state_design(qr, dqr, &ddqr, design)
+                bp.states_at_rest_base(qr, dqr, design, st)
                     .map_err(|_| DomainError)?;
-                let r = bp
-                    .model
-                    .inverse_dynamics_with(&self.inertias_of(kind, z), &q, &dq, &ddq)
+                let mut ddq = [S::zero(); MAX_DOF];
+                for (i, &c) in bp.reduced.iter().enumerate() {
+                    ddq[c] = z[2 * nq + i] * ACC_SCALE;
+                }
+                let n = bp.model.dof();
+                let foot = bp.legs.side(bp.stance).foot;
+                let p = bp.model.frame_position_in(st, foot);
+                let mut a = bp.model.frame_bias_acceleration_in(st, foot);
+                let mut jac = [[S::zero(); 2]; MAX_DOF];
+                bp.model
+                    .point_jacobian_into(st, bp.model.frames[foot].body, p, |r, c, v| {
+                        jac[c][r] = v;
+                        a[r] += v * ddq[c];
+                    });
+                ddq[0] = -a[0];
+                ddq[1] = -a[1];
+                let mut r = [S::zero(); MAX_DOF];
+                self.inertias_of(kind, z, inertias);
+                bp.model
+                    .inverse_dynamics_in(
+                        &inertias[..bp.model.bodies.len()],
+                        st,
+                        &ddq[..n],
+                        &mut r[..n],
+                    )
                     .map_err(|_| DomainError)?;
                 let lam = [r[0], r[1]];
-                let jac = bp.stance_jacobian(&q).map_err(|_| DomainError)?;
                 for (i, &c) in bp.reduced.iter().enumerate() {
                     out[i] = r[c] - jac[c][0] * lam[0] - jac[c][1] * lam[1];
                 }
@@ -752,15 +820,23 @@ impl HzdProblem {
             }
             Kind::PhaseLift => {
                 let (qr, dqr) = (&z[..nq], &z[nq..2 * nq]);
-                let ddqr: Vec<S> = z[2 * nq..3 * nq].iter().map(|&v| v * ACC_SCALE).collect();
                 let r = &z[3 * nq..];
                 let (tp, tm, tau, tau_d, tau_dd) = (r[0], r[1], r[2], r[3], r[4]);
-                let [q, dq, ddq] = bp
-                    .full_state_design(qr, dqr, &ddqr, design)
+                // The hip-to-foot angle needs no pinned base: states with the base at rest.
+                bp.states_at_rest_base(qr, dqr, design, st)
                     .map_err(|_| DomainError)?;
+                let mut ddq = [S::zero(); MAX_DOF];
+                for (i, &c) in bp.reduced.iter().enumerate() {
+                    ddq[c] = z[2 * nq + i] * ACC_SCALE;
+                }
                 let th = bp
                     .model
-                    .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)
+                    .stance_leg_angle_derivatives_in(
+                        st,
+                        &ddq[..bp.model.dof()],
+                        &bp.legs,
+                        bp.stance,
+                    )
                     .map_err(|_| DomainError)?;
                 let span = tm - tp;
                 out[0] = th.theta - tp - tau * span;
@@ -799,27 +875,25 @@ impl HzdProblem {
                 out[0] = z[0] - z[1] - z[2] * TORQUE_SCALE * z[3];
             }
             Kind::SwingHeight | Kind::SwingEnd => {
-                let zero = vec![S::zero(); nq];
+                // Swing foot relative to the stance foot, from one pass with the base at rest.
+                let zero = [S::zero(); MAX_DOF];
                 let dqr = if kind == Kind::SwingEnd {
                     &z[nq..2 * nq]
                 } else {
-                    &zero[..]
+                    &zero[..nq]
                 };
-                let [q, dq, _] = bp
-                    .full_state_design(&z[..nq], dqr, &zero, design)
+                bp.states_at_rest_base(&z[..nq], dqr, design, st)
                     .map_err(|_| DomainError)?;
-                let mut st = BodyStates::zeroed();
-                bp.model
-                    .body_states_into(&q, &dq, &mut st)
-                    .map_err(|_| DomainError)?;
-                let foot = bp.legs.side(bp.swing()).foot;
-                let p = bp.model.frame_position_in(&st, foot);
+                let (swing, stance) = (bp.legs.side(bp.swing()).foot, bp.legs.side(bp.stance).foot);
+                let ps = bp.model.frame_position_in(st, stance);
+                let p = bp.model.frame_position_in(st, swing);
                 if kind == Kind::SwingHeight {
-                    out[0] = p[1];
+                    out[0] = p[1] - ps[1];
                 } else {
-                    let v = bp.model.frame_velocity_in(&st, foot);
-                    out[0] = p[0] - z[2 * nq];
-                    out[1] = v[1];
+                    let vs = bp.model.frame_velocity_in(st, stance);
+                    let v = bp.model.frame_velocity_in(st, swing);
+                    out[0] = p[0] - ps[0] - z[2 * nq];
+                    out[1] = v[1] - vs[1];
                 }
             }
             Kind::Impact => {
@@ -830,9 +904,10 @@ impl HzdProblem {
                     .full_state_design(qn, dqn, &zero, design)
                     .map_err(|_| DomainError)?;
                 let swing_foot = bp.legs.side(bp.swing()).foot;
+                self.inertias_of(kind, z, inertias);
                 let imp = bp
                     .model
-                    .impact_with(&self.inertias_of(kind, z), &q, &dq, swing_foot)
+                    .impact_with(&inertias[..bp.model.bodies.len()], &q, &dq, swing_foot)
                     .map_err(|_| DomainError)?;
                 let dq_plus: Vec<S> = imp.dq_plus.iter().copied().collect();
                 for i in 0..nq {
@@ -844,13 +919,10 @@ impl HzdProblem {
                 out[2 * nq] = lam[1];
                 out[2 * nq + 1] = lam[1] * mu - lam[0];
                 out[2 * nq + 2] = lam[1] * mu + lam[0];
-                let mut st = BodyStates::zeroed();
                 bp.model
-                    .body_states_into(&q, &dq_plus, &mut st)
+                    .body_states_into(&q, &dq_plus, st)
                     .map_err(|_| DomainError)?;
-                let v = bp
-                    .model
-                    .frame_velocity_in(&st, bp.legs.side(bp.stance).foot);
+                let v = bp.model.frame_velocity_in(st, bp.legs.side(bp.stance).foot);
                 out[2 * nq + 3] = v[1];
             }
         }
@@ -1028,6 +1100,7 @@ impl HzdProblem {
         let mut dense = vec![0.0; blk.n_out * nv];
         let mut out = vec![Dual::<Lanes<SEED_LANES>>::from(0.0); blk.n_out];
         let mut zd = Vec::with_capacity(nv);
+        let mut scratch = Scratch::new();
         for chunk in blk.jac_vars.chunks(SEED_LANES) {
             zd.clear();
             zd.extend(z.iter().enumerate().map(|(i, &v)| {
@@ -1039,7 +1112,7 @@ impl HzdProblem {
                 }
                 Dual::new(Lanes::splat(v), Lanes(eps))
             }));
-            self.eval_block(blk.kind, &zd, &mut out)?;
+            self.eval_block_in(blk.kind, &zd, &mut out, &mut scratch)?;
             for (l, &j) in chunk.iter().enumerate() {
                 for (r, o) in out.iter().enumerate() {
                     dense[r * nv + j] = o.eps.0[l];
@@ -1066,6 +1139,7 @@ impl HzdProblem {
         let mut out = vec![HyperDual::<Lanes<SEED_LANES>>::from(0.0); blk.n_out];
         let mut zh = Vec::with_capacity(z.len());
         let mut contributions = Vec::with_capacity(blk.hess.len());
+        let mut scratch = Scratch::new();
         for pairs in blk.hess.chunks(SEED_LANES) {
             zh.clear();
             zh.extend(z.iter().enumerate().map(|(i, &v)| {
@@ -1080,7 +1154,7 @@ impl HzdProblem {
                 }
                 HyperDual::new(Lanes::splat(v), Lanes(eps1), Lanes(eps2), Lanes::splat(0.0))
             }));
-            self.eval_block(blk.kind, &zh, &mut out)?;
+            self.eval_block_in(blk.kind, &zh, &mut out, &mut scratch)?;
             contributions.extend((0..pairs.len()).map(|l| {
                 out.iter()
                     .zip(mu)
@@ -1149,9 +1223,11 @@ impl NlpProblem for HzdProblem {
     }
 
     fn constraints(&self, x: &[f64], values: &mut [f64]) -> Result<(), DomainError> {
+        let mut scratch = Scratch::new();
         for blk in &self.blocks {
             let z = Self::local(x, &blk.vars);
-            self.eval_block(blk.kind, &z, &mut values[blk.row0..blk.row0 + blk.n_out])?;
+            let out = &mut values[blk.row0..blk.row0 + blk.n_out];
+            self.eval_block_in(blk.kind, &z, out, &mut scratch)?;
         }
         Ok(())
     }

@@ -85,8 +85,23 @@ pub(crate) fn solve_stage(
     config: &PlannerConfig,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<(Vec<f64>, StageReport)> {
-    let attempt = solve_stage_attempt(problem, stage, config, None, on_progress)?;
+    let attempt = solve_stage_attempt(problem, stage, config, None, None, on_progress)?;
     attempt.into_result()
+}
+
+/// When a solve counts as stalled: its primal step has stayed below `step_norm` for
+/// `iterations` consecutive iterations while the constraint violation is still above
+/// `infeasibility`. The co-design's 0.25/0.25 m sweep start does this from iteration ~45: steps
+/// of 3e-9, violation frozen at 2.1e-2, objective moving by 2e-12 per iteration, at a fixed
+/// barrier parameter; left alone it crawls to its iteration limit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StallGuard {
+    /// Largest primal step (max norm) that counts as not moving.
+    pub step_norm: f64,
+    /// Consecutive such iterations that make a stall.
+    pub iterations: usize,
+    /// Constraint violation above which a standing iterate is not converging.
+    pub infeasibility: f64,
 }
 
 /// One solve of a stage, successful or not: the solver's last iterate with its multipliers
@@ -98,6 +113,8 @@ pub(crate) struct StageAttempt {
     pub report: StageReport,
     /// Whether the stage may use it.
     pub usable: bool,
+    /// Whether the [`StallGuard`] stopped it.
+    pub stalled: bool,
 }
 
 impl StageAttempt {
@@ -121,12 +138,13 @@ impl StageAttempt {
 }
 
 /// One solve of a stage, from the problem's initial point or from `warm_start` (a point and
-/// multipliers of a neighbouring solve).
+/// multipliers of a neighbouring solve), stopped early if `stall` says it stopped moving.
 pub(crate) fn solve_stage_attempt(
     problem: &HzdProblem,
     stage: &'static str,
     config: &PlannerConfig,
     warm_start: Option<nlp::WarmStart>,
+    stall: Option<StallGuard>,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<StageAttempt> {
     on_progress(Progress::Stage(stage));
@@ -137,8 +155,20 @@ pub(crate) fn solve_stage_attempt(
         warm_start,
         ..SolveOptions::default()
     };
+    let mut standing = 0;
+    let mut stalled = false;
     let mut callback = |r: &IterationReport| {
         on_progress(Progress::Iteration(stage, r));
+        if let Some(g) = stall {
+            let stuck = r.iteration > 0
+                && r.step_norm < g.step_norm
+                && r.primal_infeasibility > g.infeasibility;
+            standing = if stuck { standing + 1 } else { 0 };
+            if standing >= g.iterations {
+                stalled = true;
+                return IterationControl::Stop;
+            }
+        }
         IterationControl::Continue
     };
     let sol = nlp::solve_with_callback(problem, &options, &mut callback)
@@ -160,7 +190,8 @@ pub(crate) fn solve_stage_attempt(
     Ok(StageAttempt {
         solution: sol,
         report,
-        usable,
+        usable: usable && !stalled,
+        stalled,
     })
 }
 
