@@ -35,7 +35,12 @@
 //! sweeps run four at a time ([`crate::nlp::lanes`]: `Dual<Lanes<4>>`, `HyperDual<Lanes<4>>`,
 //! bit for bit the scalar results) and the blocks are spread over the rayon pool when the
 //! caller is not already on it; contributions to shared Hessian entries are added in block
-//! order, so the values never depend on the schedule. The objective's
+//! order, so the values never depend on the schedule. Each model block runs the kinematics once
+//! per evaluation, with the floating base at rest at the origin
+//! ([`PlanarBiped::states_at_rest_base`]): inverse dynamics, the stance-foot Jacobian, the
+//! stance-leg angle and the swing foot relative to the stance foot depend only on relative
+//! positions, so the pinned-stance base enters only through the base acceleration that keeps
+//! the stance foot still. The objective's
 //! derivatives are hand-derived and checked against finite differences in the tests.
 //! Acceleration and torque variables are scaled by 1/10 (PLANNER-NOTES: 219 → 78 iterations).
 
@@ -78,6 +83,26 @@ impl<S: Real> Scratch<S> {
                 com_xz_m: [z, z],
                 inertia_yy_kgm2: z,
             }; model::robot::MAX_BODIES],
+        }
+    }
+}
+
+/// Per-worker buffers of a derivative sweep over the blocks: the block scratch, the seeded
+/// local variables, the block outputs and a dense Jacobian.
+struct SweepWork<S> {
+    scratch: Scratch<S>,
+    z: Vec<S>,
+    out: Vec<S>,
+    dense: Vec<f64>,
+}
+
+impl<S: Real> SweepWork<S> {
+    fn new() -> Self {
+        Self {
+            scratch: Scratch::new(),
+            z: Vec::new(),
+            out: Vec::new(),
+            dense: Vec::new(),
         }
     }
 }
@@ -240,6 +265,8 @@ pub struct HzdProblem {
     jac_rows: Vec<usize>,
     jac_cols: Vec<usize>,
     hess_pattern: SparsityPattern,
+    /// Hessian pairs over all blocks (Σ `Block::hess.len()`).
+    hess_pairs: usize,
     /// Objective Hessian slots: (T,T unused) T–slack, T–d, slack–d, d–d.
     obj_slots: ObjectiveSlots,
     /// Cost weight of each slack variable: c_k w_a.
@@ -381,6 +408,7 @@ impl HzdProblem {
             jac_rows: Vec::new(),
             jac_cols: Vec::new(),
             hess_pattern: SparsityPattern::default(),
+            hess_pairs: 0,
             obj_slots: ObjectiveSlots::default(),
             slack_weights: Vec::new(),
             initial,
@@ -617,6 +645,7 @@ impl HzdProblem {
             .map(|i| slot(i, i, &mut hess))
             .collect();
         self.hess_pattern = hess;
+        self.hess_pairs = self.blocks.iter().map(|b| b.hess.len()).sum();
     }
 
     /// Structural Jacobian entries and Hessian pairs of a block at the probe point.
@@ -1080,69 +1109,104 @@ impl HzdProblem {
         out
     }
 
-    /// `f` of every block, in block order: on the rayon pool when called outside it (one plan:
-    /// both cores evaluate), sequentially inside it (a co-design sweep already keeps every
-    /// core busy with whole runs). Results do not depend on which.
-    fn map_blocks<T: Send>(&self, f: impl Fn(&Block) -> T + Sync + Send) -> Vec<T> {
+    /// `f(work, block, values)` for every block with its own run of `values` (`len(block)`
+    /// entries each, in block order): on the rayon pool when called outside it (one plan: both
+    /// cores evaluate), sequentially inside it (a co-design sweep already keeps every core busy
+    /// with whole runs). Each worker reuses one [`SweepWork`], so a sweep allocates and zeroes
+    /// its dual-number buffers a few times, not once per block. Results do not depend on the
+    /// schedule: each block writes only its own run.
+    fn for_each_block<S: Real + Send>(
+        &self,
+        values: &mut [f64],
+        len: impl Fn(&Block) -> usize,
+        f: impl Fn(&mut SweepWork<S>, &Block, &mut [f64]) -> Result<(), DomainError> + Sync + Send,
+    ) -> Result<(), DomainError> {
         use rayon::prelude::*;
+        let mut runs = Vec::with_capacity(self.blocks.len());
+        let mut rest = values;
+        for blk in &self.blocks {
+            let (run, tail) = rest.split_at_mut(len(blk));
+            runs.push((blk, run));
+            rest = tail;
+        }
         if rayon::current_thread_index().is_some() {
-            self.blocks.iter().map(f).collect()
+            let mut work = SweepWork::new();
+            runs.into_iter()
+                .try_for_each(|(blk, run)| f(&mut work, blk, run))
         } else {
-            self.blocks.par_iter().map(f).collect()
+            runs.into_par_iter()
+                .try_for_each_init(SweepWork::new, |work, (blk, run)| f(work, blk, run))
         }
     }
 
-    /// A block's structural Jacobian entries, in [`Block::jac`] order. Lane l of one
-    /// evaluation is the `Dual64` sweep of the chunk's column l.
-    fn block_jacobian(&self, x: &[f64], blk: &Block) -> Result<Vec<f64>, DomainError> {
-        let z = Self::local(x, &blk.vars);
+    /// A block's structural Jacobian entries, in [`Block::jac`] order, into `values`. Lane l of
+    /// one evaluation is the `Dual64` sweep of the chunk's column l.
+    fn block_jacobian(
+        &self,
+        x: &[f64],
+        blk: &Block,
+        work: &mut SweepWork<Dual<Lanes<SEED_LANES>>>,
+        values: &mut [f64],
+    ) -> Result<(), DomainError> {
         let nv = blk.vars.len();
-        let mut dense = vec![0.0; blk.n_out * nv];
-        let mut out = vec![Dual::<Lanes<SEED_LANES>>::from(0.0); blk.n_out];
-        let mut zd = Vec::with_capacity(nv);
-        let mut scratch = Scratch::new();
+        let SweepWork {
+            scratch,
+            z,
+            out,
+            dense,
+        } = work;
+        dense.clear();
+        dense.resize(blk.n_out * nv, 0.0);
+        out.clear();
+        out.resize(blk.n_out, Dual::from(0.0));
         for chunk in blk.jac_vars.chunks(SEED_LANES) {
-            zd.clear();
-            zd.extend(z.iter().enumerate().map(|(i, &v)| {
+            z.clear();
+            z.extend(blk.vars.iter().enumerate().map(|(i, &g)| {
                 let mut eps = [0.0; SEED_LANES];
                 for (l, &j) in chunk.iter().enumerate() {
                     if i == j {
                         eps[l] = 1.0;
                     }
                 }
-                Dual::new(Lanes::splat(v), Lanes(eps))
+                Dual::new(Lanes::splat(x[g]), Lanes(eps))
             }));
-            self.eval_block_in(blk.kind, &zd, &mut out, &mut scratch)?;
+            self.eval_block_in(blk.kind, z, out, scratch)?;
             for (l, &j) in chunk.iter().enumerate() {
                 for (r, o) in out.iter().enumerate() {
                     dense[r * nv + j] = o.eps.0[l];
                 }
             }
         }
-        Ok(blk.jac.iter().map(|&(r, j)| dense[r * nv + j]).collect())
+        for (v, &(r, j)) in values.iter_mut().zip(&blk.jac) {
+            *v = dense[r * nv + j];
+        }
+        Ok(())
     }
 
     /// A block's contribution Σ_r μ_r ∂²c_r to each of its Hessian pairs, in [`Block::hess`]
-    /// order (empty when its multipliers are all zero). Lane l of one evaluation is the
-    /// `HyperDual64` evaluation of the chunk's pair l.
+    /// order, into `values` (left alone when its multipliers are all zero). Lane l of one
+    /// evaluation is the `HyperDual64` evaluation of the chunk's pair l.
     fn block_hessian(
         &self,
         x: &[f64],
         multipliers: &[f64],
         blk: &Block,
-    ) -> Result<Vec<f64>, DomainError> {
+        work: &mut SweepWork<HyperDual<Lanes<SEED_LANES>>>,
+        values: &mut [f64],
+    ) -> Result<(), DomainError> {
         let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
         if mu.iter().all(|&m| m == 0.0) {
-            return Ok(Vec::new());
+            return Ok(());
         }
-        let z = Self::local(x, &blk.vars);
-        let mut out = vec![HyperDual::<Lanes<SEED_LANES>>::from(0.0); blk.n_out];
-        let mut zh = Vec::with_capacity(z.len());
-        let mut contributions = Vec::with_capacity(blk.hess.len());
-        let mut scratch = Scratch::new();
+        let SweepWork {
+            scratch, z, out, ..
+        } = work;
+        out.clear();
+        out.resize(blk.n_out, HyperDual::from(0.0));
+        let mut at = 0;
         for pairs in blk.hess.chunks(SEED_LANES) {
-            zh.clear();
-            zh.extend(z.iter().enumerate().map(|(i, &v)| {
+            z.clear();
+            z.extend(blk.vars.iter().enumerate().map(|(i, &g)| {
                 let (mut eps1, mut eps2) = ([0.0; SEED_LANES], [0.0; SEED_LANES]);
                 for (l, &(a, b)) in pairs.iter().enumerate() {
                     if i == a {
@@ -1152,17 +1216,24 @@ impl HzdProblem {
                         eps2[l] = 1.0;
                     }
                 }
-                HyperDual::new(Lanes::splat(v), Lanes(eps1), Lanes(eps2), Lanes::splat(0.0))
+                HyperDual::new(
+                    Lanes::splat(x[g]),
+                    Lanes(eps1),
+                    Lanes(eps2),
+                    Lanes::splat(0.0),
+                )
             }));
-            self.eval_block_in(blk.kind, &zh, &mut out, &mut scratch)?;
-            contributions.extend((0..pairs.len()).map(|l| {
-                out.iter()
+            self.eval_block_in(blk.kind, z, out, scratch)?;
+            for l in 0..pairs.len() {
+                values[at] = out
+                    .iter()
                     .zip(mu)
                     .map(|(o, m)| o.eps1eps2.0[l] * m)
-                    .sum::<f64>()
-            }));
+                    .sum::<f64>();
+                at += 1;
+            }
         }
-        Ok(contributions)
+        Ok(())
     }
 
     /// Constraint bounds (lower, upper).
@@ -1241,13 +1312,11 @@ impl NlpProblem for HzdProblem {
 
     fn jacobian_values(&self, x: &[f64], values: &mut [f64]) -> Result<(), DomainError> {
         // Each block fills its own run of entries, in block order.
-        let mut at = 0;
-        for block_values in self.map_blocks(|blk| self.block_jacobian(x, blk)) {
-            let block_values = block_values?;
-            values[at..at + block_values.len()].copy_from_slice(&block_values);
-            at += block_values.len();
-        }
-        Ok(())
+        self.for_each_block(
+            values,
+            |blk| blk.jac.len(),
+            |work, blk, run| self.block_jacobian(x, blk, work, run),
+        )
     }
 
     fn hessian_structure(&self) -> SparsityPattern {
@@ -1264,9 +1333,21 @@ impl NlpProblem for HzdProblem {
         values.fill(0.0);
         // Blocks share Hessian slots: their contributions are added in block order, as a
         // sequential loop would, whatever order they were computed in.
-        let parts = self.map_blocks(|blk| self.block_hessian(x, multipliers, blk));
-        for (blk, contributions) in self.blocks.iter().zip(parts) {
-            for (&slot, value) in blk.hess_slots.iter().zip(contributions?) {
+        let mut parts = vec![0.0; self.hess_pairs];
+        self.for_each_block(
+            &mut parts,
+            |blk| blk.hess.len(),
+            |work, blk, run| self.block_hessian(x, multipliers, blk, work, run),
+        )?;
+        let mut at = 0;
+        for blk in &self.blocks {
+            let run = &parts[at..at + blk.hess.len()];
+            at += blk.hess.len();
+            let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
+            if mu.iter().all(|&m| m == 0.0) {
+                continue;
+            }
+            for (&slot, value) in blk.hess_slots.iter().zip(run) {
                 values[slot] += value;
             }
         }
