@@ -130,24 +130,9 @@ impl PlanarBiped {
         let n = self.model.dof();
         let z = S::zero();
         let (mut q, mut dq, mut ddq) = (vec![z; n], vec![z; n], vec![z; n]);
+        self.fill_coordinates(qr, dqr, design, &mut q, &mut dq);
         for (i, &c) in self.reduced.iter().enumerate() {
-            q[c] = qr[i];
-            dq[c] = dqr[i];
             ddq[c] = ddqr[i];
-        }
-        for &(c, v) in &self.design {
-            q[c] = S::from(v);
-        }
-        if let Some([thigh, shin]) = design {
-            for side in [Side::Left, Side::Right] {
-                let leg = self.legs.side(side);
-                if let Some(j) = leg.thigh_design {
-                    q[self.model.joints[j].coordinate] = thigh;
-                }
-                if let Some(j) = leg.shin_design {
-                    q[self.model.joints[j].coordinate] = shin;
-                }
-            }
         }
         let mut st = BodyStates::zeroed();
         self.model.body_states_into(&q, &dq, &mut st)?;
@@ -182,6 +167,22 @@ impl PlanarBiped {
         let n = self.model.dof();
         let z = S::zero();
         let (mut q, mut dq) = ([z; MAX_DOF], [z; MAX_DOF]);
+        self.fill_coordinates(qr, dqr, design, &mut q[..n], &mut dq[..n]);
+        self.model.body_states_into(&q[..n], &dq[..n], st)?;
+        Ok(())
+    }
+
+    /// Writes the reduced coordinates and rates into full `q`, `dq` (zero elsewhere on entry),
+    /// and the design joints: this biped's fixed values, or `design` = [thigh, shin] for both
+    /// legs.
+    fn fill_coordinates<S: Real>(
+        &self,
+        qr: &[S],
+        dqr: &[S],
+        design: Option<[S; 2]>,
+        q: &mut [S],
+        dq: &mut [S],
+    ) {
         for (i, &c) in self.reduced.iter().enumerate() {
             q[c] = qr[i];
             dq[c] = dqr[i];
@@ -200,8 +201,6 @@ impl PlanarBiped {
                 }
             }
         }
-        self.model.body_states_into(&q[..n], &dq[..n], st)?;
-        Ok(())
     }
 
     /// The stance-foot Jacobian's column `c` (x and z rows) at full q.
