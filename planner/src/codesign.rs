@@ -232,39 +232,36 @@ fn codesign_run(
     // From the co-design solution with its multipliers: at the design it found (and, with
     // exact coupling, the same inertias) that point is already optimal up to the cost's
     // mass normalisation, so the polish only confirms it instead of re-centring from scratch.
-    let resume = warm.map(|(start, from_kg)| {
-        let mut start = rescaled(start, from_kg / model.total_mass_kg());
-        for v in [
-            &mut start.lower_bound_multipliers,
-            &mut start.upper_bound_multipliers,
-        ] {
-            v.truncate(n_fixed);
-        }
-        if let Some(x) = &mut start.x {
-            x.truncate(n_fixed);
-        }
-        start
-    });
     let mut x0 = vec![0.0; problem.layout.len()];
     crate::nlp::NlpProblem::initial_point(&problem, &mut x0);
     let skip_polish = study && exact && problem.max_violation(&x0) <= STUDY_POLISH_SKIP_VIOLATION;
     let (xf, reports) = if skip_polish {
         (x0, Vec::new())
     } else {
+        let resume = warm.map(|(start, from_kg)| {
+            let mut start = rescaled(start, from_kg / model.total_mass_kg());
+            for v in [
+                &mut start.lower_bound_multipliers,
+                &mut start.upper_bound_multipliers,
+            ] {
+                v.truncate(n_fixed);
+            }
+            if let Some(x) = &mut start.x {
+                x.truncate(n_fixed);
+            }
+            start
+        });
         let (xf, report) =
             plan::solve_stage_attempt(&problem, "polish", config, resume, None, on_progress)?
                 .into_result()?;
         (xf, vec![report])
     };
-    let gait_reports = if reports.is_empty() {
-        outer
-            .last()
-            .map(|o| vec![o.report.clone()])
-            .unwrap_or_default()
-    } else {
-        reports.clone()
+    // The gait file's solver summary: the polish, or the co-design solve it stands for.
+    let gait_reports = match (reports.is_empty(), outer.last()) {
+        (true, Some(o)) => std::slice::from_ref(&o.report),
+        _ => &reports[..],
     };
-    let mut gait = plan::gait_from_solution(&problem, &xf, urdf_ref, &urdf, &gait_reports)?;
+    let mut gait = plan::gait_from_solution(&problem, &xf, urdf_ref, &urdf, gait_reports)?;
     if !study {
         gait.feedforward = Some(crate::verify::feedforward_from_orbit(
             &model,

@@ -265,8 +265,6 @@ pub struct HzdProblem {
     jac_rows: Vec<usize>,
     jac_cols: Vec<usize>,
     hess_pattern: SparsityPattern,
-    /// Hessian pairs over all blocks (Σ `Block::hess.len()`).
-    hess_pairs: usize,
     /// Objective Hessian slots: (T,T unused) T–slack, T–d, slack–d, d–d.
     obj_slots: ObjectiveSlots,
     /// Cost weight of each slack variable: c_k w_a.
@@ -408,7 +406,6 @@ impl HzdProblem {
             jac_rows: Vec::new(),
             jac_cols: Vec::new(),
             hess_pattern: SparsityPattern::default(),
-            hess_pairs: 0,
             obj_slots: ObjectiveSlots::default(),
             slack_weights: Vec::new(),
             initial,
@@ -645,7 +642,6 @@ impl HzdProblem {
             .map(|i| slot(i, i, &mut hess))
             .collect();
         self.hess_pattern = hess;
-        self.hess_pairs = self.blocks.iter().map(|b| b.hess.len()).sum();
     }
 
     /// Structural Jacobian entries and Hessian pairs of a block at the probe point.
@@ -1333,7 +1329,7 @@ impl NlpProblem for HzdProblem {
         values.fill(0.0);
         // Blocks share Hessian slots: their contributions are added in block order, as a
         // sequential loop would, whatever order they were computed in.
-        let mut parts = vec![0.0; self.hess_pairs];
+        let mut parts = vec![0.0; self.blocks.iter().map(|b| b.hess.len()).sum()];
         self.for_each_block(
             &mut parts,
             |blk| blk.hess.len(),

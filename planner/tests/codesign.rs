@@ -22,6 +22,13 @@ fn warm_start() -> &'static planner::plan::PlannedGait {
     })
 }
 
+/// The co-designed lengths every sweep run reaches (README: 0.3488 / 0.3500 m, std < 1e-4 m
+/// over the 25 runs), to that spread.
+fn assert_at_the_sweep_optimum([thigh_m, shin_m]: [f64; 2]) {
+    assert!((thigh_m - 0.3488).abs() < 1e-4, "thigh {thigh_m} m");
+    assert!((shin_m - 0.3500).abs() < 1e-4, "shin {shin_m} m");
+}
+
 fn problem(exact: bool, with_cost: bool) -> (HzdProblem, Vec<f64>) {
     let config = PlannerConfig::load(CONFIG).expect("config");
     let (model, _) = generate_model(&DesignLengths::ADAM).expect("model");
@@ -202,16 +209,7 @@ fn a_co_design_solve_out_of_iterations_restarts_from_its_last_iterate() {
     assert!(polish.iterations <= 20, "{polish:?}");
     // The same optimum as the unrestricted solves (README: 0.3488 / 0.3500 m, std < 1e-4 m
     // over the sweep).
-    assert!(
-        (r.design.thigh_length_m - 0.3488).abs() < 1e-4,
-        "{:?}",
-        r.design
-    );
-    assert!(
-        (r.design.shin_length_m - 0.3500).abs() < 1e-4,
-        "{:?}",
-        r.design
-    );
+    assert_at_the_sweep_optimum([r.design.thigh_length_m, r.design.shin_length_m]);
 }
 
 /// The sweep's 0.25/0.25 m start stalls (steps of 3e-9, violation frozen at 2.1e-2 after ~45
@@ -238,16 +236,7 @@ fn a_stalled_co_design_solve_is_restarted_when_it_stops_moving() {
     // Both solves together took fewer iterations than the cap alone: the first was stopped by
     // the stall guard, not by the cap.
     assert!(first.iterations < CODESIGN_RESTART_ITERATIONS, "{first:?}");
-    assert!(
-        (r.design.thigh_length_m - 0.3488).abs() < 1e-4,
-        "{:?}",
-        r.design
-    );
-    assert!(
-        (r.design.shin_length_m - 0.3500).abs() < 1e-4,
-        "{:?}",
-        r.design
-    );
+    assert_at_the_sweep_optimum([r.design.thigh_length_m, r.design.shin_length_m]);
 }
 
 /// The convergence study's runs (exact coupling) report the co-design optimum evaluated on the
@@ -275,8 +264,7 @@ fn the_convergence_study_reports_the_co_design_optimum_on_the_regenerated_robot(
         assert_eq!(run.initial_m, start);
         let o = run.outcome.as_ref().expect("run converged");
         println!("{start:?}: {o:?}");
-        assert!((o.lengths_m[0] - 0.3488).abs() < 1e-4, "{o:?}");
-        assert!((o.lengths_m[1] - 0.3500).abs() < 1e-4, "{o:?}");
+        assert_at_the_sweep_optimum(o.lengths_m);
         let rel = (o.cost_of_transport - reference).abs() / reference;
         assert!(
             rel < 1e-4,
