@@ -12,7 +12,7 @@
 //! left/right relabeling in [`PlanarModel::reset_map`]).
 
 use crate::kinematics::{rot_sin_cos, BodyStates};
-use crate::linalg::solve_in_place;
+use crate::linalg::{solve_in_place, solve_many_in_place};
 use crate::robot::{BodyInertia, PlanarModel, Side, MAX_DOF};
 use crate::{ModelError, Real, Result};
 use nalgebra::{DMatrix, DVector};
@@ -412,18 +412,65 @@ impl PlanarModel {
         contacts: &[usize],
     ) -> Result<ConstrainedDynamics<S>> {
         let n = self.dof();
+        let bu = self.generalized_forces(u)?;
+        let (mut a, mut rhs) = self.constrained_system(q, dq, contacts)?;
+        for i in 0..n {
+            rhs[i] = bu[i] + rhs[i];
+        }
+        solve_in_place(&mut a, &mut rhs, "constrained dynamics")?;
+        let ddq = DVector::from_iterator(n, rhs.iter().take(n).copied());
+        let forces_n = (0..contacts.len())
+            .map(|k| [rhs[n + 2 * k], rhs[n + 2 * k + 1]])
+            .collect();
+        Ok(ConstrainedDynamics { ddq, forces_n })
+    }
+
+    /// q̈ of [`Self::constrained_dynamics`] for each of several inputs `inputs` at one state,
+    /// with one dynamics pass and one elimination: each result is bit for bit
+    /// `constrained_dynamics(q, dq, u, contacts).ddq` for its `u` (a closed-loop law that
+    /// needs the accelerations for several torques, e.g. to build a decoupling matrix).
+    pub fn constrained_accelerations<S: Real>(
+        &self,
+        q: &[S],
+        dq: &[S],
+        inputs: &[&[S]],
+        contacts: &[usize],
+    ) -> Result<Vec<DVector<S>>> {
+        let n = self.dof();
+        let (mut a, drift) = self.constrained_system(q, dq, contacts)?;
+        let mut rhs = DMatrix::from_element(drift.len(), inputs.len(), S::zero());
+        for (k, u) in inputs.iter().enumerate() {
+            let bu = self.generalized_forces(u)?;
+            for i in 0..drift.len() {
+                rhs[(i, k)] = if i < n { bu[i] + drift[i] } else { drift[i] };
+            }
+        }
+        solve_many_in_place(&mut a, &mut rhs, "constrained dynamics")?;
+        Ok((0..inputs.len())
+            .map(|k| DVector::from_iterator(n, rhs.column(k).iter().take(n).copied()))
+            .collect())
+    }
+
+    /// The constrained-dynamics system `[D −Aᵀ; A 0]` and its right-hand side without the
+    /// input, `[−H; −J̇ q̇; 0]` (see [`Self::constrained_dynamics`]).
+    fn constrained_system<S: Real>(
+        &self,
+        q: &[S],
+        dq: &[S],
+        contacts: &[usize],
+    ) -> Result<(DMatrix<S>, DVector<S>)> {
+        let n = self.dof();
         let nc = 2 * contacts.len();
         let design = self.design_joints();
         let m = nc + design.len();
         let dy = self.dynamics(q, dq)?;
-        let bu = self.generalized_forces(u)?;
         let mut st = BodyStates::zeroed();
         self.body_states_into(q, dq, &mut st)?;
         let mut a = DMatrix::from_element(n + m, n + m, S::zero());
         let mut rhs = DVector::from_element(n + m, S::zero());
         a.view_mut((0, 0), (n, n)).copy_from(&dy.mass_matrix);
         for i in 0..n {
-            rhs[i] = bu[i] - dy.drift[i];
+            rhs[i] = -dy.drift[i];
         }
         for (k, &frame) in contacts.iter().enumerate() {
             let jac = self.frame_jacobian(&st, frame);
@@ -441,12 +488,7 @@ impl PlanarModel {
             a[(n + nc + k, c)] = S::one();
             a[(c, n + nc + k)] = -S::one();
         }
-        solve_in_place(&mut a, &mut rhs, "constrained dynamics")?;
-        let ddq = DVector::from_iterator(n, rhs.iter().take(n).copied());
-        let forces_n = (0..contacts.len())
-            .map(|k| [rhs[n + 2 * k], rhs[n + 2 * k + 1]])
-            .collect();
-        Ok(ConstrainedDynamics { ddq, forces_n })
+        Ok((a, rhs))
     }
 
     /// Rigid, plastic impact of frame `impact_frame` with the ground: the frame comes to rest,

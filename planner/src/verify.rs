@@ -19,6 +19,7 @@ use model::bezier;
 use model::gait::{GaitFile, PhaseDefinition};
 use model::PlanarModel;
 use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
 use std::fmt;
 
 /// Largest joint difference between the closed-loop fixed point and the planned post-impact
@@ -263,6 +264,19 @@ impl ClosedLoop {
         Ok(bp.reduced.iter().map(|&c| cd.ddq[c]).collect())
     }
 
+    /// [`Self::accelerations`] for several torque vectors at one state.
+    fn accelerations_for(&self, q: &[f64], dq: &[f64], inputs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
+        let bp = &self.biped;
+        let stance_foot = bp.legs.side(bp.stance).foot;
+        let all = bp
+            .model
+            .constrained_accelerations(q, dq, inputs, &[stance_foot])?;
+        Ok(all
+            .iter()
+            .map(|ddq| bp.reduced.iter().map(|&c| ddq[c]).collect())
+            .collect())
+    }
+
     /// Outputs y, ẏ and ÿ for reduced accelerations `ddqr`.
     fn outputs(
         &self,
@@ -329,16 +343,20 @@ impl ClosedLoop {
             f.extend(ddq);
             return Ok((f, u));
         }
-        let zero_u = vec![0.0; nu];
-        let a0 = self.accelerations(&q, &dq, &zero_u)?;
+        // The accelerations for u = 0 and for each unit torque, from one dynamics pass and one
+        // elimination (each bit for bit its own constrained-dynamics solve).
+        let mut inputs = vec![vec![0.0; nu]; nu + 1];
+        for k in 0..nu {
+            inputs[k + 1][k] = 1.0;
+        }
+        let inputs: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
+        let mut accelerations = self.accelerations_for(&q, &dq, &inputs)?.into_iter();
+        let a0 = accelerations.next().unwrap_or_default();
         let (y, dy, ddy0) = self.outputs(qr, dqr, &a0)?;
         let m = y.len();
         let mut big_a = DMatrix::zeros(m, nu);
         let mut cols = Vec::with_capacity(nu);
-        for k in 0..nu {
-            let mut u = zero_u.clone();
-            u[k] = 1.0;
-            let ak = self.accelerations(&q, &dq, &u)?;
+        for (k, ak) in accelerations.enumerate() {
             let col: Vec<f64> = ak.iter().zip(&a0).map(|(a, b)| a - b).collect();
             let (_, _, ddyk) = self.outputs(qr, dqr, &ak)?;
             for o in 0..m {
@@ -536,16 +554,20 @@ pub fn verify_gait_with(
     let mut iterations = 0;
     let mut residual;
     let h = 1e-6;
+    // Central differences of the Poincaré map, one column per state: 2n independent one-step
+    // simulations, spread over the rayon pool (each column is computed exactly as it would be
+    // sequentially, so the Jacobian does not depend on the schedule).
     let jacobian = |x: &DVector<f64>| -> Result<DMatrix<f64>> {
-        let mut jac = DMatrix::zeros(n, n);
-        for i in 0..n {
-            let (mut xp, mut xm) = (x.clone(), x.clone());
-            xp[i] += h;
-            xm[i] -= h;
-            let col = (cl.poincare(xp.as_slice())? - cl.poincare(xm.as_slice())?) / (2.0 * h);
-            jac.set_column(i, &col);
-        }
-        Ok(jac)
+        let columns = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[i] += h;
+                xm[i] -= h;
+                Ok((cl.poincare(xp.as_slice())? - cl.poincare(xm.as_slice())?) / (2.0 * h))
+            })
+            .collect::<Result<Vec<DVector<f64>>>>()?;
+        Ok(DMatrix::from_columns(&columns))
     };
     for _ in 0..options.max_newton_iterations {
         let px = cl.poincare(x.as_slice())?;
