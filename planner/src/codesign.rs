@@ -174,9 +174,12 @@ fn codesign_run(
             .solver
             .max_iterations
             .min(CODESIGN_RESTART_ITERATIONS);
-        let stall = Some(CODESIGN_STALL);
+        let guards = plan::Guards {
+            stall: Some(CODESIGN_STALL),
+            ..plan::Guards::NONE
+        };
         let attempt =
-            plan::solve_stage_attempt(&problem, "co-design", &capped, None, stall, on_progress)?;
+            plan::solve_stage_attempt(&problem, "co-design", &capped, None, guards, on_progress)?;
         // A solve that stalled or ran out of iterations is restarted once from its last iterate
         // (the barrier parameter starts afresh; the initial design of the run is unchanged),
         // with the config's whole iteration limit.
@@ -193,11 +196,12 @@ fn codesign_run(
                 "co-design (restarted)",
                 config,
                 None,
-                stall,
+                guards,
                 on_progress,
             )?;
             // Report both solves together: iterations and times are the run's.
             again.report.iterations += attempt.report.iterations;
+            again.report.restoration_iterations += attempt.report.restoration_iterations;
             again.report.solve_time_s += attempt.report.solve_time_s;
             again.report.evaluation_time_s += attempt.report.evaluation_time_s;
             (restarted, again)
@@ -251,9 +255,15 @@ fn codesign_run(
             }
             start
         });
-        let (xf, report) =
-            plan::solve_stage_attempt(&problem, "polish", config, resume, None, on_progress)?
-                .into_result()?;
+        let (xf, report) = plan::solve_stage_attempt(
+            &problem,
+            "polish",
+            config,
+            resume,
+            plan::Guards::NONE,
+            on_progress,
+        )?
+        .into_result()?;
         (xf, vec![report])
     };
     // The gait file's solver summary: the polish, or the co-design solve it stands for.

@@ -25,8 +25,10 @@ pub struct StageReport {
     pub stage: &'static str,
     /// Solver status.
     pub status: String,
-    /// Iterations.
+    /// Iterations, those of the solver's feasibility-restoration phase included.
     pub iterations: usize,
+    /// Of which in the solver's feasibility-restoration phase.
+    pub restoration_iterations: usize,
     /// Final objective.
     pub objective: f64,
     /// Largest constraint or bound violation at the end.
@@ -85,8 +87,28 @@ pub(crate) fn solve_stage(
     config: &PlannerConfig,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<(Vec<f64>, StageReport)> {
-    let attempt = solve_stage_attempt(problem, stage, config, None, None, on_progress)?;
+    let attempt = solve_stage_attempt(problem, stage, config, None, Guards::NONE, on_progress)?;
     attempt.into_result()
+}
+
+/// When [`solve_stage_attempt`] gives up on a solve before the solver does.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Guards {
+    /// Stop a solve that stopped moving.
+    pub stall: Option<StallGuard>,
+    /// Stop a solve as soon as the solver enters its feasibility-restoration phase. On the HZD
+    /// problem a feasibility start that needs restoration is a poor start: with step durations
+    /// of 0.6-0.7 s the first start spent 58 s and ~1000 restoration iterations before it got
+    /// back, while the next start needed 46 iterations.
+    pub abandon_restoration: bool,
+}
+
+impl Guards {
+    /// No guard: the solver runs to its own end (or the iteration cap).
+    pub const NONE: Guards = Guards {
+        stall: None,
+        abandon_restoration: false,
+    };
 }
 
 /// When a solve counts as stalled: its primal step has stayed below `step_norm` for
@@ -144,7 +166,7 @@ pub(crate) fn solve_stage_attempt(
     stage: &'static str,
     config: &PlannerConfig,
     warm_start: Option<nlp::WarmStart>,
-    stall: Option<StallGuard>,
+    guards: Guards,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<StageAttempt> {
     on_progress(Progress::Stage(stage));
@@ -157,9 +179,31 @@ pub(crate) fn solve_stage_attempt(
     };
     let mut standing = 0;
     let mut stalled = false;
+    // ripopt counts only its main iterations against `max_iterations`; its restoration phase
+    // is a nested solve with iterations of its own (reported through the same callback,
+    // numbered from 0 again, not flagged). Every reported iteration counts here, so that the
+    // cap of a feasibility start bounds its time: with step durations of 0.6-0.7 s the first
+    // start spent 58 s in restoration (about 1000 iterations) before this.
+    let mut performed = 0;
+    let mut capped = false;
+    let mut restoration = false;
+    let cap = config.solver.max_iterations;
     let mut callback = |r: &IterationReport| {
         on_progress(Progress::Iteration(stage, r));
-        if let Some(g) = stall {
+        if r.iteration > 0 {
+            performed += 1;
+        } else if performed > 0 {
+            // A nested solve starts at iteration 0: the restoration phase.
+            restoration = true;
+        }
+        if performed >= cap {
+            capped = true;
+            return IterationControl::Stop;
+        }
+        if restoration && guards.abandon_restoration {
+            return IterationControl::Stop;
+        }
+        if let Some(g) = guards.stall {
             let stuck = r.iteration > 0
                 && r.step_norm < g.step_norm
                 && r.primal_infeasibility > g.infeasibility;
@@ -174,10 +218,16 @@ pub(crate) fn solve_stage_attempt(
     let sol = nlp::solve_with_callback(problem, &options, &mut callback)
         .map_err(|e| PlannerError::Solver(e.to_string()))?;
     let violation = problem.max_violation(&sol.x);
+    let status = if capped && !sol.status.is_success() {
+        nlp::SolveStatus::IterationLimit
+    } else {
+        sol.status
+    };
     let report = StageReport {
         stage,
-        status: format!("{:?}", sol.status).to_lowercase(),
-        iterations: sol.statistics.iterations,
+        status: format!("{status:?}").to_lowercase(),
+        iterations: sol.statistics.iterations.max(performed),
+        restoration_iterations: performed.saturating_sub(sol.statistics.iterations),
         objective: sol.statistics.objective,
         violation,
         solve_time_s: sol.statistics.total_time.as_secs_f64(),
@@ -185,10 +235,12 @@ pub(crate) fn solve_stage_attempt(
     };
     // The feasibility stage only has to deliver a feasible start for the second: a point that
     // satisfies every constraint is kept even if the solver stopped on a numerical status.
-    let usable = (sol.status.is_success() || (stage == FEASIBILITY && violation < 1e-8))
-        && violation <= 1e-5;
+    let usable =
+        (status.is_success() || (stage == FEASIBILITY && violation < 1e-8)) && violation <= 1e-5;
+    let mut solution = sol;
+    solution.status = status;
     Ok(StageAttempt {
-        solution: sol,
+        solution,
         report,
         usable: usable && !stalled,
         stalled,
@@ -236,11 +288,26 @@ pub fn plan_gait(
     let mut spent = (0, 0.0, 0.0);
     let mut found = None;
     let mut last_error = None;
-    for &(step, duration) in &starts {
+    for (k, &(step, duration)) in starts.iter().enumerate() {
         let guess = initial_guess(&biped, &probe.layout, step, duration)?;
         let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
         let attempt = Instant::now();
-        match solve_stage(&feasibility, FEASIBILITY, &capped, on_progress) {
+        // A start that needs the solver's restoration phase is dropped for the next one; the
+        // last start may use it.
+        let guards = Guards {
+            abandon_restoration: k + 1 < starts.len(),
+            ..Guards::NONE
+        };
+        let solved = solve_stage_attempt(
+            &feasibility,
+            FEASIBILITY,
+            &capped,
+            None,
+            guards,
+            on_progress,
+        )
+        .and_then(StageAttempt::into_result);
+        match solved {
             Ok((x, mut report)) => {
                 report.iterations += spent.0;
                 report.solve_time_s += spent.1;

@@ -202,3 +202,41 @@ fn derivatives_are_bit_identical_in_parallel_and_sequentially() {
     assert!(parallel.0.iter().any(|&b| b != 0) && parallel.1.iter().any(|&b| b != 0));
     assert_eq!(parallel, sequential);
 }
+
+/// With step durations of 0.6–0.7 s the first feasibility start falls into the solver's
+/// restoration phase (about a thousand nested iterations and 58 s before the guard). A start
+/// that needs restoration is dropped for the next one, so the whole feasibility stage stays
+/// within one start's iteration cap, counting every iteration the solver reports (restoration
+/// included), and the gait still satisfies Table I's shorter durations.
+#[test]
+fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
+    use planner::plan::{Progress, FEASIBILITY_MAX_ITERATIONS};
+    let (model, text, mut config) = setup();
+    config.gait.step_duration_s = [0.6, 0.7];
+    let (mut starts, mut iterations) = (0, 0);
+    let mut in_feasibility = false;
+    let gait = plan_gait(
+        &model,
+        "../robots/adam_planar.urdf",
+        &text,
+        &config,
+        &mut |p| match p {
+            Progress::Stage(s) => {
+                in_feasibility = s == "feasibility";
+                starts += usize::from(in_feasibility);
+            }
+            Progress::Iteration(_, r) => {
+                iterations += usize::from(in_feasibility && r.iteration > 0)
+            }
+        },
+    )
+    .expect("plans");
+    let feasibility = &gait.stages[0];
+    println!("{starts} starts, {iterations} reported iterations, stage: {feasibility:?}");
+    assert_eq!(starts, 2, "the first start is dropped, the second succeeds");
+    assert!(iterations < FEASIBILITY_MAX_ITERATIONS, "{iterations}");
+    // The stage's report counts the dropped start's iterations too, every one of them.
+    assert_eq!(feasibility.iterations, iterations);
+    let d = gait.gait.step_duration_s;
+    assert!((0.6 - 1e-6..=0.7 + 1e-6).contains(&d), "{d}");
+}
