@@ -233,6 +233,24 @@ enum Kind {
     TauEnds,
 }
 
+impl Kind {
+    /// What the constraint group means, for reports and errors.
+    fn describe(self) -> String {
+        match self {
+            Kind::Dynamics => "pinned-stance dynamics and contact forces".into(),
+            Kind::PhaseLift => "phase variable".into(),
+            Kind::OutputDynamics(o) => format!("virtual constraint {o} (output dynamics)"),
+            Kind::OutputStart(o) => format!("virtual constraint {o} at the step start"),
+            Kind::Interval => "collocation defects".into(),
+            Kind::Power(c) => format!("power slacks (coordinate {c})"),
+            Kind::SwingHeight => "swing-foot clearance".into(),
+            Kind::SwingEnd => "swing foot at impact (guard, step length, descent)".into(),
+            Kind::Impact => "impact, periodicity, impulse and lift-off".into(),
+            Kind::TauEnds => "phase at the step ends".into(),
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 struct Block {
     kind: Kind,
@@ -1096,7 +1114,7 @@ impl HzdProblem {
                         .max(0.0)
                 })
                 .fold(0.0, f64::max);
-            let name = format!("{:?}", b.kind);
+            let name = b.kind.describe();
             match out.iter_mut().find(|e| e.0 == name) {
                 Some(e) => e.1 = e.1.max(v),
                 None => out.push((name, v)),

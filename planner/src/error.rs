@@ -46,7 +46,7 @@ pub enum PlannerError {
         reason: String,
     },
     /// The NLP solver failed or ended without a usable solution.
-    #[error("{stage}: the solver ended with status {status} after {iterations} iterations (constraint violation {violation:.2e})")]
+    #[error("{stage}: the solver ended with status {status} after {iterations} iterations (constraint violation {violation:.2e}{})", violated_text(violated))]
     NotSolved {
         /// Which solve.
         stage: String,
@@ -56,8 +56,21 @@ pub enum PlannerError {
         iterations: usize,
         /// Largest constraint violation at the end.
         violation: f64,
+        /// The most violated constraint groups at the end, worst first, with their violation.
+        violated: Vec<(String, f64)>,
     },
     /// The solver itself reported an error.
     #[error("solver error: {0}")]
     Solver(String),
+}
+
+fn violated_text(violated: &[(String, f64)]) -> String {
+    if violated.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = violated
+        .iter()
+        .map(|(what, v)| format!("{what} {v:.2e}"))
+        .collect();
+    format!("; most violated: {}", list.join(", "))
 }

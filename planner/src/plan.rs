@@ -137,6 +137,8 @@ pub(crate) struct StageAttempt {
     pub usable: bool,
     /// Whether the [`StallGuard`] stopped it.
     pub stalled: bool,
+    /// If not usable: the most violated constraint groups at its end, worst first.
+    pub violated: Vec<(String, f64)>,
 }
 
 impl StageAttempt {
@@ -148,6 +150,7 @@ impl StageAttempt {
                 status: self.report.status.clone(),
                 iterations: self.report.iterations,
                 violation: self.report.violation,
+                violated: self.violated,
             });
         }
         Ok((self.solution.x, self.report))
@@ -237,13 +240,29 @@ pub(crate) fn solve_stage_attempt(
     // satisfies every constraint is kept even if the solver stopped on a numerical status.
     let usable =
         (status.is_success() || (stage == FEASIBILITY && violation < 1e-8)) && violation <= 1e-5;
+    let usable = usable && !stalled;
+    // What a failed stage leaves violated, for the error a user reads (which Table I or physical
+    // constraint the config asks too much of).
+    let violated = if usable {
+        Vec::new()
+    } else {
+        let mut v: Vec<(String, f64)> = problem
+            .violation_by_kind(&sol.x)
+            .into_iter()
+            .filter(|(_, v)| *v > 1e-6)
+            .collect();
+        v.sort_by(|a, b| b.1.total_cmp(&a.1));
+        v.truncate(3);
+        v
+    };
     let mut solution = sol;
     solution.status = status;
     Ok(StageAttempt {
         solution,
         report,
-        usable: usable && !stalled,
+        usable,
         stalled,
+        violated,
     })
 }
 

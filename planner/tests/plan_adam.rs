@@ -240,3 +240,45 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     let d = gait.gait.step_duration_s;
     assert!((0.6 - 1e-6..=0.7 + 1e-6).contains(&d), "{d}");
 }
+
+/// A config no robot can walk (0.9 m of swing-foot clearance on 0.7 m legs) fails every start
+/// with an error that says which constraint groups are left violated, worst first.
+#[test]
+fn an_infeasible_config_fails_naming_the_most_violated_constraints() {
+    let (model, text, mut config) = setup();
+    config.gait.swing_clearance_m = 0.9;
+    config.solver.max_iterations = 30;
+    let e = plan_gait(
+        &model,
+        "../robots/adam_planar.urdf",
+        &text,
+        &config,
+        &mut |_| {},
+    )
+    .expect_err("no gait clears 0.9 m");
+    println!("{e}");
+    let planner::PlannerError::NotSolved {
+        violation,
+        ref violated,
+        ..
+    } = e
+    else {
+        panic!("{e:?}");
+    };
+    assert!(!violated.is_empty() && violated.len() <= 3, "{violated:?}");
+    assert!(
+        violated.windows(2).all(|w| w[0].1 >= w[1].1),
+        "{violated:?}"
+    );
+    assert!(violated.iter().all(|(_, v)| *v > 1e-6));
+    // The worst group is the violation the error reports.
+    assert!(
+        (violated[0].1 - violation).abs() <= 1e-9 * violation.max(1.0),
+        "{violated:?}"
+    );
+    let message = e.to_string();
+    assert!(
+        message.contains("most violated: ") && message.contains(&violated[0].0),
+        "{message}"
+    );
+}
