@@ -99,7 +99,7 @@ pub(crate) struct Guards {
     /// Stop a solve as soon as the solver enters its feasibility-restoration phase. On the HZD
     /// problem a feasibility start that needs restoration is a poor start: with step durations
     /// of 0.6-0.7 s the first start spent 58 s and ~1000 restoration iterations before it got
-    /// back, while the next start needed 46 iterations.
+    /// back, while the next start needed 45 iterations.
     pub abandon_restoration: bool,
 }
 

@@ -214,6 +214,7 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     let (model, text, mut config) = setup();
     config.gait.step_duration_s = [0.6, 0.7];
     let (mut starts, mut iterations) = (0, 0);
+    let mut per_start: Vec<usize> = Vec::new();
     let mut in_feasibility = false;
     let gait = plan_gait(
         &model,
@@ -224,15 +225,22 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
             Progress::Stage(s) => {
                 in_feasibility = s == "feasibility";
                 starts += usize::from(in_feasibility);
+                if in_feasibility {
+                    per_start.push(0);
+                }
             }
             Progress::Iteration(_, r) => {
-                iterations += usize::from(in_feasibility && r.iteration > 0)
+                let counted = usize::from(in_feasibility && r.iteration > 0);
+                iterations += counted;
+                if let Some(n) = per_start.last_mut() {
+                    *n += counted;
+                }
             }
         },
     )
     .expect("plans");
     let feasibility = &gait.stages[0];
-    println!("{starts} starts, {iterations} reported iterations, stage: {feasibility:?}");
+    println!("{starts} starts ({per_start:?} iterations), stage: {feasibility:?}");
     assert_eq!(starts, 2, "the first start is dropped, the second succeeds");
     assert!(iterations < FEASIBILITY_MAX_ITERATIONS, "{iterations}");
     // The stage's report counts the dropped start's iterations too, every one of them.
