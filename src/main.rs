@@ -414,6 +414,57 @@ enum BenchWhat {
         #[arg(long, default_value = "configs/planner/adam.toml")]
         config: PathBuf,
     },
+    /// Verify a gait `--runs` times like `adam gait check` (Newton on the Poincaré map,
+    /// eigenvalues): wall time per run, the median, and whether the reports are identical.
+    Check {
+        /// Number of checks.
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// The gait file.
+        #[arg(default_value = "configs/gaits/adam_walk.json")]
+        gait: PathBuf,
+    },
+}
+
+fn bench_check(runs: usize, gait_path: &std::path::Path) -> Result<()> {
+    if runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let (gait, robot) = planner::verify::load_gait_and_robot(gait_path)?;
+    let options = planner::verify::VerifyOptions::default();
+    println!(
+        "{:>3} {:>8} {:>7} {:>12} {:>10}",
+        "run", "wall s", "newton", "residual", "|λ|max"
+    );
+    let mut times = Vec::with_capacity(runs);
+    let mut first: Option<planner::verify::VerifyReport> = None;
+    let mut identical = true;
+    for run in 1..=runs {
+        let t0 = std::time::Instant::now();
+        let r = planner::verify::verify_gait(&robot, &gait, options)?;
+        let wall = t0.elapsed().as_secs_f64();
+        println!(
+            "{run:>3} {wall:>8.3} {:>7} {:>12.3e} {:>10.6}",
+            r.newton_iterations, r.fixed_point_residual, r.spectral_radius
+        );
+        times.push(wall);
+        match &first {
+            None => first = Some(r),
+            Some(f) => identical &= *f == r,
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "\n{}: median {:.2} s over {runs} checks; the reports are {}",
+        gait_path.display(),
+        times[runs / 2],
+        if identical {
+            "identical"
+        } else {
+            "NOT identical"
+        }
+    );
+    Ok(())
 }
 
 fn bench_plan(runs: usize, robot: &PathBuf, config: &PathBuf) -> Result<()> {
@@ -1046,6 +1097,9 @@ fn run(cli: Cli) -> Result<()> {
                     config,
                 },
         } => bench_plan(runs, &robot, &config),
+        Command::Bench {
+            what: BenchWhat::Check { runs, gait },
+        } => bench_check(runs, &gait),
         Command::Plot {
             what: PlotWhat::Portrait { log, compare, out },
         } => {

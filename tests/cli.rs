@@ -417,3 +417,19 @@ fn sim_run_injects_a_fault_profile_and_names_a_bad_one() {
         "{err}"
     );
 }
+
+/// `adam bench check` verifies the shipped gait repeatedly: one row per run, the median, and
+/// the same report every time (the parallel Jacobian does not depend on the schedule).
+#[test]
+fn bench_check_reports_identical_verifications() {
+    let (ok, out, err) = adam(&["bench", "check", "--runs", "2"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("median") && out.contains("over 2 checks"),
+        "{out}"
+    );
+    assert!(out.contains("the reports are identical"), "{out}");
+    assert!(out.contains("0.86"), "|λ|max of the shipped gait: {out}");
+    let (ok, _, err) = adam(&["bench", "check", "--runs", "0"]);
+    assert!(!ok && err.contains("--runs must be at least 1"), "{err}");
+}
