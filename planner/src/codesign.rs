@@ -176,7 +176,7 @@ fn codesign_run(
             .min(CODESIGN_RESTART_ITERATIONS);
         let guards = plan::Guards {
             stall: Some(CODESIGN_STALL),
-            ..plan::Guards::NONE
+            ..plan::Guards::default()
         };
         let attempt =
             plan::solve_stage_attempt(&problem, "co-design", &capped, None, guards, on_progress)?;
@@ -200,10 +200,7 @@ fn codesign_run(
                 on_progress,
             )?;
             // Report both solves together: iterations and times are the run's.
-            again.report.iterations += attempt.report.iterations;
-            again.report.restoration_iterations += attempt.report.restoration_iterations;
-            again.report.solve_time_s += attempt.report.solve_time_s;
-            again.report.evaluation_time_s += attempt.report.evaluation_time_s;
+            again.report.absorb(&attempt.report);
             (restarted, again)
         } else {
             (problem, attempt)
@@ -260,7 +257,7 @@ fn codesign_run(
             "polish",
             config,
             resume,
-            plan::Guards::NONE,
+            plan::Guards::default(),
             on_progress,
         )?
         .into_result()?;

@@ -267,6 +267,15 @@ struct Block {
     hess_slots: Vec<usize>,
 }
 
+impl Block {
+    /// Whether all of this block's multipliers are zero (it adds nothing to the Hessian).
+    fn inactive(&self, multipliers: &[f64]) -> bool {
+        multipliers[self.row0..self.row0 + self.n_out]
+            .iter()
+            .all(|&m| m == 0.0)
+    }
+}
+
 /// The HZD collocation problem.
 pub struct HzdProblem {
     /// The robot.
@@ -1208,10 +1217,10 @@ impl HzdProblem {
         work: &mut SweepWork<HyperDual<Lanes<SEED_LANES>>>,
         values: &mut [f64],
     ) -> Result<(), DomainError> {
-        let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
-        if mu.iter().all(|&m| m == 0.0) {
+        if blk.inactive(multipliers) {
             return Ok(());
         }
+        let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
         let SweepWork {
             scratch, z, out, ..
         } = work;
@@ -1357,8 +1366,8 @@ impl NlpProblem for HzdProblem {
         for blk in &self.blocks {
             let run = &parts[at..at + blk.hess.len()];
             at += blk.hess.len();
-            let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
-            if mu.iter().all(|&m| m == 0.0) {
+            // Skipped, not added as zeros: +0.0 would turn a −0.0 entry into +0.0.
+            if blk.inactive(multipliers) {
                 continue;
             }
             for (&slot, value) in blk.hess_slots.iter().zip(run) {

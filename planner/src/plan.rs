@@ -19,16 +19,15 @@ use model::PlanarModel;
 use std::time::Instant;
 
 /// What one solve did.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct StageReport {
     /// `feasibility` or `cost of transport`.
     pub stage: &'static str,
     /// Solver status.
     pub status: String,
-    /// Iterations, those of the solver's feasibility-restoration phase included.
+    /// Iterations, those of the solver's feasibility-restoration phase included (ripopt does
+    /// not say which ones those are).
     pub iterations: usize,
-    /// Of which in the solver's feasibility-restoration phase.
-    pub restoration_iterations: usize,
     /// Final objective.
     pub objective: f64,
     /// Largest constraint or bound violation at the end.
@@ -37,6 +36,16 @@ pub struct StageReport {
     pub solve_time_s: f64,
     /// Wall time spent evaluating the problem (derivatives included), s.
     pub evaluation_time_s: f64,
+}
+
+impl StageReport {
+    /// Adds the work of `earlier`, a solve this one stands for (a dropped feasibility start, a
+    /// co-design solve that was restarted): iterations and times are the stage's in all.
+    pub fn absorb(&mut self, earlier: &StageReport) {
+        self.iterations += earlier.iterations;
+        self.solve_time_s += earlier.solve_time_s;
+        self.evaluation_time_s += earlier.evaluation_time_s;
+    }
 }
 
 /// A planned gait and how it was found.
@@ -87,11 +96,13 @@ pub(crate) fn solve_stage(
     config: &PlannerConfig,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<(Vec<f64>, StageReport)> {
-    let attempt = solve_stage_attempt(problem, stage, config, None, Guards::NONE, on_progress)?;
+    let attempt =
+        solve_stage_attempt(problem, stage, config, None, Guards::default(), on_progress)?;
     attempt.into_result()
 }
 
-/// When [`solve_stage_attempt`] gives up on a solve before the solver does.
+/// When [`solve_stage_attempt`] gives up on a solve before the solver does (the default: never;
+/// the solver runs to its own end or the iteration cap).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Guards {
     /// Stop a solve that stopped moving.
@@ -101,14 +112,6 @@ pub(crate) struct Guards {
     /// of 0.6-0.7 s the first start spent 58 s and ~1000 restoration iterations before it got
     /// back, while the next start needed 45 iterations.
     pub abandon_restoration: bool,
-}
-
-impl Guards {
-    /// No guard: the solver runs to its own end (or the iteration cap).
-    pub const NONE: Guards = Guards {
-        stall: None,
-        abandon_restoration: false,
-    };
 }
 
 /// When a solve counts as stalled: its primal step has stayed below `step_norm` for
@@ -189,16 +192,18 @@ pub(crate) fn solve_stage_attempt(
     // start spent 58 s in restoration (about 1000 iterations) before this.
     let mut performed = 0;
     let mut capped = false;
-    let mut restoration = false;
+    let mut starts_seen = 0;
     let cap = config.solver.max_iterations;
     let mut callback = |r: &IterationReport| {
         on_progress(Progress::Iteration(stage, r));
-        if r.iteration > 0 {
+        // A second iteration 0 is a nested solve starting: the restoration phase (also when it
+        // starts right after the initial point).
+        if r.iteration == 0 {
+            starts_seen += 1;
+        } else {
             performed += 1;
-        } else if performed > 0 {
-            // A nested solve starts at iteration 0: the restoration phase.
-            restoration = true;
         }
+        let restoration = starts_seen > 1;
         if performed >= cap {
             capped = true;
             return IterationControl::Stop;
@@ -230,7 +235,6 @@ pub(crate) fn solve_stage_attempt(
         stage,
         status: format!("{status:?}").to_lowercase(),
         iterations: sol.statistics.iterations.max(performed),
-        restoration_iterations: performed.saturating_sub(sol.statistics.iterations),
         objective: sol.statistics.objective,
         violation,
         solve_time_s: sol.statistics.total_time.as_secs_f64(),
@@ -304,42 +308,40 @@ pub fn plan_gait(
     ];
     let mut capped = config.clone();
     capped.solver.max_iterations = config.solver.max_iterations.min(FEASIBILITY_MAX_ITERATIONS);
-    let mut spent = (0, 0.0, 0.0);
+    // The dropped starts' work, counted in the stage's figures.
+    let mut spent = StageReport::default();
     let mut found = None;
     let mut last_error = None;
     for (k, &(step, duration)) in starts.iter().enumerate() {
         let guess = initial_guess(&biped, &probe.layout, step, duration)?;
         let feasibility = HzdProblem::new(biped.clone(), config.clone(), guess, false)?;
-        let attempt = Instant::now();
         // A start that needs the solver's restoration phase is dropped for the next one; the
         // last start may use it.
         let guards = Guards {
             abandon_restoration: k + 1 < starts.len(),
-            ..Guards::NONE
+            ..Guards::default()
         };
-        let solved = solve_stage_attempt(
+        let attempt = Instant::now();
+        match solve_stage_attempt(
             &feasibility,
             FEASIBILITY,
             &capped,
             None,
             guards,
             on_progress,
-        )
-        .and_then(StageAttempt::into_result);
-        match solved {
-            Ok((x, mut report)) => {
-                report.iterations += spent.0;
-                report.solve_time_s += spent.1;
-                report.evaluation_time_s += spent.2;
+        ) {
+            Ok(a) if a.usable => {
+                let (x, mut report) = a.into_result()?;
+                report.absorb(&spent);
                 found = Some((x, report));
                 break;
             }
+            Ok(a) => {
+                spent.absorb(&a.report);
+                last_error = a.into_result().err();
+            }
             Err(e) => {
-                // Count the attempt honestly in the stage's figures.
-                if let PlannerError::NotSolved { iterations, .. } = &e {
-                    spent.0 += iterations;
-                }
-                spent.1 += attempt.elapsed().as_secs_f64();
+                spent.solve_time_s += attempt.elapsed().as_secs_f64();
                 last_error = Some(e);
             }
         }

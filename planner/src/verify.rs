@@ -258,10 +258,7 @@ impl ClosedLoop {
 
     /// Joint accelerations q̈_r for torques u (pinned stance, design rigid).
     fn accelerations(&self, q: &[f64], dq: &[f64], u: &[f64]) -> Result<Vec<f64>> {
-        let bp = &self.biped;
-        let stance_foot = bp.legs.side(bp.stance).foot;
-        let cd = bp.model.constrained_dynamics(q, dq, u, &[stance_foot])?;
-        Ok(bp.reduced.iter().map(|&c| cd.ddq[c]).collect())
+        Ok(self.accelerations_for(q, dq, &[u])?.remove(0))
     }
 
     /// [`Self::accelerations`] for several torque vectors at one state.

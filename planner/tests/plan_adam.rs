@@ -216,6 +216,8 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     let (mut starts, mut iterations) = (0, 0);
     let mut per_start: Vec<usize> = Vec::new();
     let mut in_feasibility = false;
+    // Whether a start reported a second iteration 0 (its nested restoration solve).
+    let (mut zeros, mut restored) = (0, false);
     let gait = plan_gait(
         &model,
         "../robots/adam_planar.urdf",
@@ -227,11 +229,14 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
                 starts += usize::from(in_feasibility);
                 if in_feasibility {
                     per_start.push(0);
+                    zeros = 0;
                 }
             }
             Progress::Iteration(_, r) => {
                 let counted = usize::from(in_feasibility && r.iteration > 0);
                 iterations += counted;
+                zeros += usize::from(r.iteration == 0);
+                restored |= zeros > 1;
                 if let Some(n) = per_start.last_mut() {
                     *n += counted;
                 }
@@ -245,6 +250,8 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     assert!(iterations < FEASIBILITY_MAX_ITERATIONS, "{iterations}");
     // The stage's report counts the dropped start's iterations too, every one of them.
     assert_eq!(feasibility.iterations, iterations);
+    // The dropped start did enter restoration (that is why it was dropped).
+    assert!(restored);
     let d = gait.gait.step_duration_s;
     assert!((0.6 - 1e-6..=0.7 + 1e-6).contains(&d), "{d}");
 }
