@@ -146,6 +146,9 @@ enum Command {
         /// Output gait file (JSON).
         #[arg(long, default_value = "configs/gaits/adam_walk.json")]
         out: PathBuf,
+        /// NLP backend, overriding the config's `[solver] backend`: `ripopt` or `native`.
+        #[arg(long, value_parser = parse_backend)]
+        backend: Option<planner::config::SolverBackend>,
     },
     /// Gait files: `adam gait check <gait.json>` verifies a gait independently of the optimizer.
     Gait {
@@ -413,6 +416,9 @@ enum BenchWhat {
         /// Planner config.
         #[arg(long, default_value = "configs/planner/adam.toml")]
         config: PathBuf,
+        /// NLP backend, overriding the config's `[solver] backend`: `ripopt` or `native`.
+        #[arg(long, value_parser = parse_backend)]
+        backend: Option<planner::config::SolverBackend>,
     },
     /// Verify a gait `--runs` times like `adam gait check` (Newton on the Poincaré map,
     /// eigenvalues): wall time per run, the median, and whether the reports are identical.
@@ -467,14 +473,33 @@ fn bench_check(runs: usize, gait_path: &std::path::Path) -> Result<()> {
     Ok(())
 }
 
-fn bench_plan(runs: usize, robot: &PathBuf, config: &PathBuf) -> Result<()> {
+/// `--backend ripopt|native`.
+fn parse_backend(text: &str) -> std::result::Result<planner::config::SolverBackend, String> {
+    match text {
+        "ripopt" => Ok(planner::config::SolverBackend::Ripopt),
+        "native" => Ok(planner::config::SolverBackend::Native),
+        other => Err(format!(
+            "unknown backend `{other}`: expected `ripopt` or `native`"
+        )),
+    }
+}
+
+fn bench_plan(
+    runs: usize,
+    robot: &PathBuf,
+    config: &PathBuf,
+    backend: Option<planner::config::SolverBackend>,
+) -> Result<()> {
     if runs == 0 {
         bail!("--runs must be at least 1");
     }
     let text =
         std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
     let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
-    let cfg = planner::config::PlannerConfig::load(config)?;
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(backend) = backend {
+        cfg.solver.backend = backend;
+    }
     println!(
         "{:>3} {:>9} {:>10} {:>11} {:>10} {:>11} {:>10}",
         "run", "set-up s", "feas. iter", "feas. solve", "cost iter", "cost solve", "total s"
@@ -504,10 +529,11 @@ fn bench_plan(runs: usize, robot: &PathBuf, config: &PathBuf) -> Result<()> {
     totals.sort_by(f64::total_cmp);
     iterations.sort_unstable();
     println!(
-        "\nADAM, {} variables, {} constraints: median {:.2} s and {} iterations over {runs} plans \
-         (set-up, both solves and the feed-forward table); the solutions are {}",
+        "\nADAM, {} variables, {} constraints, {:?} backend: median {:.2} s and {} iterations over \
+         {runs} plans (set-up, both solves and the feed-forward table); the solutions are {}",
         size.0,
         size.1,
+        cfg.solver.backend,
         totals[runs / 2],
         iterations[runs / 2],
         if identical {
@@ -804,11 +830,19 @@ fn rayon_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-fn plan(robot: &PathBuf, config: &PathBuf, out: &PathBuf) -> Result<()> {
+fn plan(
+    robot: &PathBuf,
+    config: &PathBuf,
+    out: &PathBuf,
+    backend: Option<planner::config::SolverBackend>,
+) -> Result<()> {
     let text =
         std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
     let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
-    let cfg = planner::config::PlannerConfig::load(config)?;
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(backend) = backend {
+        cfg.solver.backend = backend;
+    }
     let urdf_ref = relative_path(robot, out);
     let planned =
         planner::plan::plan_gait(&model, &urdf_ref, &text, &cfg, &mut progress_printer())?;
@@ -1057,7 +1091,12 @@ fn run(cli: Cli) -> Result<()> {
             gait,
             config,
         } => soak(minutes, &faults, seed, log_dir, &config, &gait),
-        Command::Plan { robot, config, out } => plan(&robot, &config, &out),
+        Command::Plan {
+            robot,
+            config,
+            out,
+            backend,
+        } => plan(&robot, &config, &out, backend),
         Command::Gait {
             command: GaitCommand::Check { gait, epsilon },
         } => gait_check(&gait, epsilon),
@@ -1095,8 +1134,9 @@ fn run(cli: Cli) -> Result<()> {
                     runs,
                     robot,
                     config,
+                    backend,
                 },
-        } => bench_plan(runs, &robot, &config),
+        } => bench_plan(runs, &robot, &config, backend),
         Command::Bench {
             what: BenchWhat::Check { runs, gait },
         } => bench_check(runs, &gait),

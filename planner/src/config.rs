@@ -60,6 +60,21 @@ pub struct SolverConfig {
     pub tolerance: f64,
     /// Iteration limit per solve.
     pub max_iterations: usize,
+    /// The NLP backend: `"ripopt"` (default) or `"native"` (our own interior point,
+    /// [`crate::nlp::NativeSolver`]; a stage it cannot finish is solved again with ripopt).
+    #[serde(default)]
+    pub backend: SolverBackend,
+}
+
+/// Which NLP backend the planner uses (`[solver] backend`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SolverBackend {
+    /// ripopt, the IPOPT port (`planner::nlp::Backend::Ripopt`).
+    #[default]
+    Ripopt,
+    /// Our own interior point (`planner::nlp::Backend::Native`).
+    Native,
 }
 
 /// A planner config file.
@@ -149,6 +164,7 @@ impl Default for PlannerConfig {
             solver: SolverConfig {
                 tolerance: 1e-6,
                 max_iterations: 500,
+                backend: SolverBackend::Ripopt,
             },
             codesign: CodesignConfig::default(),
         }
@@ -328,5 +344,28 @@ mod tests {
             .expect_err("rejected")
             .to_string();
         assert!(e.contains("surprise"), "{e}");
+    }
+
+    #[test]
+    fn the_backend_is_ripopt_unless_the_config_names_another() {
+        let text = toml::to_string(&PlannerConfig::default()).expect("serializes");
+        let without: String = text
+            .lines()
+            .filter(|l| !l.starts_with("backend"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let cfg = PlannerConfig::from_toml(&without, "x.toml").expect("parses");
+        assert_eq!(cfg.solver.backend, SolverBackend::Ripopt);
+        let native = text.replace("backend = \"ripopt\"", "backend = \"native\"");
+        let cfg = PlannerConfig::from_toml(&native, "x.toml").expect("parses");
+        assert_eq!(cfg.solver.backend, SolverBackend::Native);
+        let bad = text.replace("backend = \"ripopt\"", "backend = \"ipopt\"");
+        let e = PlannerConfig::from_toml(&bad, "x.toml")
+            .expect_err("rejected")
+            .to_string();
+        assert!(
+            e.contains("x.toml") && e.contains("ipopt") && e.contains("native"),
+            "{e}"
+        );
     }
 }

@@ -6,7 +6,7 @@
 
 use crate::biped::PlanarBiped;
 use crate::collocation::{HzdProblem, TORQUE_SCALE};
-use crate::config::PlannerConfig;
+use crate::config::{PlannerConfig, SolverBackend};
 use crate::guess::initial_guess;
 use crate::nlp::{self, IterationControl, IterationReport, SolveOptions};
 use crate::{PlannerError, Result};
@@ -176,11 +176,16 @@ pub(crate) fn solve_stage_attempt(
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<StageAttempt> {
     on_progress(Progress::Stage(stage));
-    let options = SolveOptions {
+    let backend = match config.solver.backend {
+        SolverBackend::Ripopt => nlp::Backend::Ripopt,
+        SolverBackend::Native => nlp::Backend::Native,
+    };
+    let mut options = SolveOptions {
         tolerance: config.solver.tolerance,
         constraint_violation_tolerance: 1e-6,
         max_iterations: config.solver.max_iterations,
         warm_start,
+        backend,
         ..SolveOptions::default()
     };
     let mut standing = 0;
@@ -192,39 +197,64 @@ pub(crate) fn solve_stage_attempt(
     // start spent 58 s in restoration (about 1000 iterations) before this.
     let mut performed = 0;
     let mut capped = false;
-    let mut starts_seen = 0;
-    let cap = config.solver.max_iterations;
-    let mut callback = |r: &IterationReport| {
-        on_progress(Progress::Iteration(stage, r));
-        // A second iteration 0 is a nested solve starting: the restoration phase (also when it
-        // starts right after the initial point).
-        if r.iteration == 0 {
-            starts_seen += 1;
-        } else {
-            performed += 1;
-        }
-        let restoration = starts_seen > 1;
-        if performed >= cap {
-            capped = true;
-            return IterationControl::Stop;
-        }
-        if restoration && guards.abandon_restoration {
-            return IterationControl::Stop;
-        }
-        if let Some(g) = guards.stall {
-            let stuck = r.iteration > 0
-                && r.step_norm < g.step_norm
-                && r.primal_infeasibility > g.infeasibility;
-            standing = if stuck { standing + 1 } else { 0 };
-            if standing >= g.iterations {
-                stalled = true;
+    let mut earlier: Option<nlp::SolveStatistics> = None;
+    let sol = loop {
+        let mut starts_seen = 0;
+        let cap = config.solver.max_iterations;
+        let mut callback = |r: &IterationReport| {
+            on_progress(Progress::Iteration(stage, r));
+            // A second iteration 0 is a nested solve starting: the restoration phase (also
+            // when it starts right after the initial point).
+            if r.iteration == 0 {
+                starts_seen += 1;
+            } else {
+                performed += 1;
+            }
+            let restoration = starts_seen > 1;
+            if performed >= cap {
+                capped = true;
                 return IterationControl::Stop;
             }
+            if restoration && guards.abandon_restoration {
+                return IterationControl::Stop;
+            }
+            if let Some(g) = guards.stall {
+                let stuck = r.iteration > 0
+                    && r.step_norm < g.step_norm
+                    && r.primal_infeasibility > g.infeasibility;
+                standing = if stuck { standing + 1 } else { 0 };
+                if standing >= g.iterations {
+                    stalled = true;
+                    return IterationControl::Stop;
+                }
+            }
+            IterationControl::Continue
+        };
+        let mut sol = nlp::solve_with_callback(problem, &options, &mut callback)
+            .map_err(|e| PlannerError::Solver(e.to_string()))?;
+        if let Some(e) = earlier {
+            let s = &mut sol.statistics;
+            s.iterations += e.iterations;
+            s.total_time += e.total_time;
+            s.evaluation_time += e.evaluation_time;
+            s.solver_time += e.solver_time;
         }
-        IterationControl::Continue
+        // The native interior point has no restoration phase: where it needs one (or its
+        // linear algebra fails) the stage is solved again by ripopt, which has one, unless
+        // the caller drops such starts anyway.
+        let native_gave_up = options.backend == nlp::Backend::Native
+            && matches!(
+                sol.status,
+                nlp::SolveStatus::RestorationFailed
+                    | nlp::SolveStatus::NumericalError
+                    | nlp::SolveStatus::TinyStep
+            );
+        if !native_gave_up || guards.abandon_restoration || capped || stalled {
+            break sol;
+        }
+        earlier = Some(sol.statistics);
+        options.backend = nlp::Backend::Ripopt;
     };
-    let sol = nlp::solve_with_callback(problem, &options, &mut callback)
-        .map_err(|e| PlannerError::Solver(e.to_string()))?;
     let violation = problem.max_violation(&sol.x);
     let status = if capped && !sol.status.is_success() {
         nlp::SolveStatus::IterationLimit

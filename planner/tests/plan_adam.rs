@@ -297,3 +297,62 @@ fn an_infeasible_config_fails_naming_the_most_violated_constraints() {
         "{message}"
     );
 }
+
+/// The native interior point (`[solver] backend = "native"`) plans ADAM on its own: the
+/// feasibility solve from the planner's first start ends optimal without ripopt's restoration
+/// phase, and the whole plan gives the ripopt plan's gait (cost of transport 0.020842 in
+/// `plans_a_feasible_gait_inside_table_one_deterministically`) to within 0.5 %, verified by
+/// the closed-loop simulation.
+#[test]
+fn the_native_backend_plans_a_gait_that_verifies() {
+    use planner::config::SolverBackend;
+    use planner::nlp::{solve, Backend, SolveOptions, SolveStatus};
+    let (model, text, mut config) = setup();
+    config.solver.backend = SolverBackend::Native;
+    let bp = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[]).expect("biped");
+    let probe = HzdProblem::new(bp.clone(), config.clone(), Vec::new(), false).expect("problem");
+    let x0 = initial_guess(&bp, &probe.layout, 0.25, 0.65).expect("guess");
+    let feasibility = HzdProblem::new(bp, config.clone(), x0, false).expect("problem");
+    let alone = solve(
+        &feasibility,
+        &SolveOptions {
+            backend: Backend::Native,
+            tolerance: config.solver.tolerance,
+            constraint_violation_tolerance: 1e-6,
+            ..SolveOptions::default()
+        },
+    )
+    .expect("solves");
+    println!(
+        "native feasibility: {:?} in {} iterations",
+        alone.status, alone.statistics.iterations
+    );
+    assert_eq!(alone.status, SolveStatus::Optimal);
+
+    let a = plan_gait(
+        &model,
+        "../robots/adam_planar.urdf",
+        &text,
+        &config,
+        &mut |_| {},
+    )
+    .expect("plans");
+    for s in &a.stages {
+        println!(
+            "native {:<18} {:>8} {:>4} iterations, objective {:.6}, violation {:.1e}, {:.3} s",
+            s.stage, s.status, s.iterations, s.objective, s.violation, s.solve_time_s
+        );
+        assert_eq!(s.status, "optimal");
+        assert!(s.violation < 1e-6, "{}: violation {}", s.stage, s.violation);
+    }
+    let g = &a.gait;
+    assert!(
+        (g.cost_of_transport / 0.020842 - 1.0).abs() < 5e-3,
+        "CoT {}",
+        g.cost_of_transport
+    );
+    let report = planner::verify::verify_gait(&model, g, planner::verify::VerifyOptions::default())
+        .expect("verifies");
+    println!("{report}");
+    assert!(report.passed(1e-6), "{report}");
+}

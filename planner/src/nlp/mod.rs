@@ -6,9 +6,9 @@
 //! through [`SolveOptions::backend`] or by implementing [`NlpSolver`].
 //!
 //! ```text
-//! NlpProblem ──validate──▶ backend adapter ──▶ ripopt IPM ──▶ Solution
-//!   (ours)                 (times evaluations,                (x, λ, z_l, z_u, status,
-//!                           relays iteration callback)          iterations, timings)
+//! NlpProblem ──validate──▶ backend adapter ──▶ ripopt IPM ─────────────▶ Solution
+//!   (ours)                 (times evaluations,   or native IPM (ipm, kkt)  (x, λ, z_l, z_u, status,
+//!                           relays iteration callback)                     iterations, timings)
 //! ```
 //!
 //! * [`ad`]: write a small problem once, generic over a dual-number scalar
@@ -16,6 +16,7 @@
 //!   forward-mode AD ([`ad::DenseAdProblem`]).
 //! * [`check`]: compare any problem's derivatives with finite differences (tests only;
 //!   no solve loop uses finite differences).
+//! * `ipm` / `kkt` (private; [`NativeSolver`]): the native interior point and its KKT system.
 //! * [`lanes`]: a real type of L lanes, so that one evaluation carries L dual seeds (the
 //!   collocation problem's Jacobian columns and Hessian pairs, four at a time).
 //!
@@ -34,12 +35,13 @@
 //!   HS20 and HS44; HS116 ends below the published value),
 //!   and the ADAM gait in 43 + 77 iterations (CasADi + IPOPT + MUMPS: 14 + 64 on a comparable
 //!   five-link problem, `shared/PLANNER-NOTES.md`).
-//! - **our own IPM on faer's sparse LDLᵀ**: faer has the factorization (symbolic + numeric
-//!   LDLᵀ with regularization) but not the rest — barrier update, filter, second-order
-//!   corrections, restoration, scaling — months of work to reach IPOPT's robustness; kept as
-//!   the route to speed if ripopt's linear algebra stays the bottleneck (after the derivative
-//!   work of December 2026, feral's LDLᵀ factorizations are about half of the plan: 166 of
-//!   them, ≈ 9 ms each; `planner/NLP.md`).
+//! - **our own interior point** ([`NativeSolver`], [`Backend::Native`], built December 2026):
+//!   IPOPT's algorithm (filter line search, second-order corrections, monotone barrier update,
+//!   inertia correction) on a condensed KKT system factorized by feral, the LDLᵀ under ripopt.
+//!   It reaches the same 50 of 57 Hock–Schittkowski optima (a different 7: it has no
+//!   restoration phase) and plans ADAM in 40 + 78 iterations to the same gait, but no faster:
+//!   feral's factorization is still most of the time. faer's sparse LDLᵀ, the other candidate,
+//!   does not pivot across supernodes and breaks down on these KKT matrices (`planner/NLP.md`).
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
 //!   filter, and its own feasibility restoration; not attempted.
@@ -107,9 +109,14 @@
 //!   objective to 9 digits, 0.035 s / 0.111 s — ripopt is about 1.4× slower there.
 //!
 //! Same iteration counts as IPOPT, no system libraries, exact-Hessian support and
-//! warm starts made writing our own interior point method (or an SQP on clarabel)
-//! unjustified: the remaining gap is linear-algebra speed, not robustness.
+//! warm starts keep ripopt the default. The native backend was then written for speed
+//! (issue #3: it owns its KKT system, so a faster factorization can be put under it) and
+//! as an independent cross-check; it matches ripopt's iterations and results, not yet its
+//! robustness (no restoration phase: the planner re-solves such a stage with ripopt), and
+//! with the same factorization it is no faster (`planner/NLP.md`, "Native interior point").
 
+mod ipm;
+mod kkt;
 mod problem;
 mod ripopt_backend;
 mod solver;
@@ -119,6 +126,7 @@ pub mod ad;
 pub mod check;
 pub mod lanes;
 
+pub use ipm::NativeSolver;
 pub use problem::{DomainError, NlpProblem, SparsityPattern};
 pub use ripopt_backend::RipoptSolver;
 pub use solver::{

@@ -180,6 +180,9 @@ pub enum Backend {
     /// method (filter line search, sparse LDLᵀ with inertia correction). EPL-2.0.
     #[default]
     Ripopt,
+    /// Our own primal–dual interior point ([`super::NativeSolver`]): IPOPT's filter line search on a
+    /// condensed KKT system factorized by feral's LDLᵀ, without a restoration phase.
+    Native,
 }
 
 /// Options common to every backend.
@@ -311,6 +314,9 @@ pub fn solve_with_callback(
     validate_problem(problem, options.warm_start.as_ref())?;
     match options.backend {
         Backend::Ripopt => RipoptSolver.solve_with_callback(problem, options, on_iteration),
+        Backend::Native => {
+            super::ipm::NativeSolver.solve_with_callback(problem, options, on_iteration)
+        }
     }
 }
 
