@@ -61,7 +61,8 @@ pub struct SolverConfig {
     /// Iteration limit per solve.
     pub max_iterations: usize,
     /// The NLP backend: `"ripopt"` (default) or `"native"` (our own interior point,
-    /// [`crate::nlp::NativeSolver`]; a stage it cannot finish is solved again with ripopt).
+    /// [`crate::nlp::NativeSolver`]; a stage whose restoration fails is solved again with
+    /// ripopt).
     #[serde(default)]
     pub backend: SolverBackend,
 }

@@ -203,14 +203,15 @@ pub(crate) fn solve_stage_attempt(
         let cap = config.solver.max_iterations;
         let mut callback = |r: &IterationReport| {
             on_progress(Progress::Iteration(stage, r));
-            // A second iteration 0 is a nested solve starting: the restoration phase (also
-            // when it starts right after the initial point).
+            // Restoration: a second iteration 0, a nested solve starting (ripopt; also when it
+            // starts right after the initial point), or a report flagged as restoration (the
+            // native backend).
             if r.iteration == 0 {
                 starts_seen += 1;
             } else {
                 performed += 1;
             }
-            let restoration = starts_seen > 1;
+            let restoration = starts_seen > 1 || r.restoration;
             if performed >= cap {
                 capped = true;
                 return IterationControl::Stop;
@@ -239,9 +240,9 @@ pub(crate) fn solve_stage_attempt(
             s.evaluation_time += e.evaluation_time;
             s.solver_time += e.solver_time;
         }
-        // The native interior point has no restoration phase: where it needs one (or its
-        // linear algebra fails) the stage is solved again by ripopt, which has one, unless
-        // the caller drops such starts anyway.
+        // Where the native interior point's restoration phase or its linear algebra fails, the
+        // stage is solved again by ripopt (a second, more seasoned restoration), unless the
+        // caller drops such starts anyway.
         let native_gave_up = options.backend == nlp::Backend::Native
             && matches!(
                 sol.status,

@@ -42,12 +42,11 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
 /// Where the native interior point (`Backend::Native`) does not reach the published optimum.
 const KNOWN_FAILURES_NATIVE: &[(&str, &str)] = &[
     ("HS2", "local minimum f = 4.9412 from the standard start (ripopt, IPOPT: same)"),
-    ("HS13", "degenerate (no constraint qualification at x*): the line search fails near f = 1.01, where IPOPT needs its restoration phase, which the native backend does not have"),
+    ("HS13", "degenerate (no constraint qualification at x* = (1, 0)): alternates between the line search and restoration up to the iteration limit, at f = 1.08 (ripopt stops at 0.994, IPOPT at 0.9946)"),
     ("HS20", "local minimum f = 40.199 at the mirror vertex (ripopt, IPOPT: same)"),
-    ("HS27", "the line search fails far from x* (infeasibility 2): needs a restoration phase"),
     ("HS44", "nonconvex bilinear: local minimum f = -13 (ripopt, IPOPT: same)"),
     ("HS108", "degenerate: stops at f = -0.675 like ripopt"),
-    ("HS116", "reaches 97.58747 (as ripopt, below the published value) but the line search then fails: RestorationFailed"),
+    ("HS116", "reaches 97.58747 after a restoration phase, below the published 97.588409 and feasible: the better point ripopt finds too"),
 ];
 
 thread_local! {

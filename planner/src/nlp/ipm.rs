@@ -5,6 +5,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::kkt::KktSystem;
+use super::restoration::Restoration;
 use super::solver::{
     EvaluationCounts, IterationControl, IterationReport, NlpSolver, Result, Solution, SolveOptions,
     SolveStatistics, SolveStatus,
@@ -32,9 +33,12 @@ use std::time::{Duration, Instant};
 /// * Fraction to the boundary τ = max(0.99, 1 − μ); bound multipliers kept within a factor
 ///   1e10 of μ / slack.
 ///
-/// There is no feasibility-restoration phase: where IPOPT would enter it (the line search
-/// finds no acceptable step), the solve ends with [`SolveStatus::RestorationFailed`] and the
-/// caller decides (the planner then uses ripopt, which has one).
+/// * Feasibility restoration where the line search finds no acceptable step: IPOPT's ℓ₁
+///   restoration problem (ρ = 1000, proximity weight √μ) solved by this same method, left as
+///   soon as the outer filter accepts a point with 10 % less violation; its iterations are
+///   reported with `restoration: true`. A restoration that converges to an infeasible point
+///   ends the solve as [`SolveStatus::Infeasible`], one that fails as
+///   [`SolveStatus::RestorationFailed`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NativeSolver;
 
@@ -179,6 +183,9 @@ struct Direction {
     vu: Vec<f64>,
 }
 
+/// The exit test of a restoration phase: called with each accepted iterate; true ends it.
+type ExitTest<'a> = Box<dyn FnMut(&[f64]) -> bool + 'a>;
+
 /// An accepted trial point of the line search.
 struct Trial {
     x: Vec<f64>,
@@ -240,6 +247,10 @@ struct Ipm<'a> {
     delta_w_last: f64,
     kkt: Option<KktSystem>,
     iterations: usize,
+    /// False inside a restoration phase (which has none of its own).
+    allow_restoration: bool,
+    /// Inside a restoration phase: called with each accepted iterate; true ends the phase.
+    exit_test: Option<ExitTest<'a>>,
 }
 
 impl<'a> Ipm<'a> {
@@ -285,6 +296,8 @@ impl<'a> Ipm<'a> {
             delta_w_last: 0.0,
             kkt: None,
             iterations: 0,
+            allow_restoration: true,
+            exit_test: None,
         }
     }
 
@@ -623,36 +636,7 @@ impl<'a> Ipm<'a> {
 
     /// Barrier objective at (f, x, s) for the current μ.
     fn barrier(&self, f: f64, x: &[f64], s: &[f64]) -> f64 {
-        let mu = self.mu;
-        let mut phi = f;
-        let mut term = |slack: f64, one_sided: bool| {
-            phi -= mu * slack.ln();
-            if one_sided {
-                phi += KAPPA_D * mu * slack;
-            }
-        };
-        for i in 0..self.n {
-            let b = self.xb[i];
-            let one = b.lower.is_some() != b.upper.is_some();
-            if let Some(l) = b.lower {
-                term(x[i] - l, one);
-            }
-            if let Some(u) = b.upper {
-                term(u - x[i], one);
-            }
-        }
-        for i in 0..self.m {
-            if let Some(b) = self.sb[i] {
-                let one = b.lower.is_some() != b.upper.is_some();
-                if let Some(l) = b.lower {
-                    term(s[i] - l, one);
-                }
-                if let Some(u) = b.upper {
-                    term(u - s[i], one);
-                }
-            }
-        }
-        phi
+        barrier_value(&self.xb, &self.sb, self.mu, f, x, s)
     }
 
     /// Gradient of the barrier objective in x and s.
@@ -721,40 +705,23 @@ impl<'a> Ipm<'a> {
     /// Factorizes the KKT matrix with inertia correction; returns the δ_w it needed.
     fn factorize(&mut self, sx: &[f64], ss: &[f64]) -> Option<f64> {
         let (n, m) = (self.n, self.m);
-        let mut delta_w = 0.0;
+        let correct = |i: Option<super::kkt::Inertia>| {
+            i.is_some_and(|i| i.positive == n && i.negative == m && i.zero == 0)
+        };
         // Always a small δ_c (IPOPT's `perturb_always_cd`): an exactly zero (2,2) block for
         // the equalities makes the LDLᵀ delay pivots (ADAM: 47 + 81 iterations and ~8 ms per
         // factorization without it, 40 + 78 and ~7 ms with it).
         let delta_c = DELTA_C_BAR * self.mu.powf(KAPPA_C);
-        let mut primal = vec![0.0; n];
-        let mut dual = vec![0.0; m];
-        let mut attempts = 0;
-        loop {
-            attempts += 1;
-            for i in 0..n {
-                primal[i] = if self.fixed[i] { 1.0 } else { sx[i] + delta_w };
-            }
-            for i in 0..m {
-                dual[i] = -delta_c
-                    - if self.sb[i].is_some() {
-                        1.0 / (ss[i] + delta_w)
-                    } else {
-                        0.0
-                    };
-            }
+        let mut delta_w = 0.0;
+        for _ in 0..60 {
+            let (primal, dual) = self.diagonals(sx, ss, delta_w, delta_c);
             let kkt = self.kkt.as_mut()?;
             kkt.assemble(&self.hess, &self.jac, &primal, &dual, &self.fixed);
-            let inertia = kkt.factorize();
-            let correct =
-                inertia.is_some_and(|i| i.positive == n && i.negative == m && i.zero == 0);
-            if correct {
+            if correct(kkt.factorize()) {
                 if delta_w > 0.0 {
                     self.delta_w_last = delta_w;
                 }
                 return Some(delta_w);
-            }
-            if attempts > 60 {
-                return None;
             }
             delta_w = if delta_w == 0.0 {
                 if self.delta_w_last == 0.0 {
@@ -771,6 +738,32 @@ impl<'a> Ipm<'a> {
                 return None;
             }
         }
+        None
+    }
+
+    /// The KKT matrix's diagonals for δ_w and δ_c: Σ_x + δ_w (1 for a fixed variable) and
+    /// −δ_c − 1/(Σ_s + δ_w) (the slack eliminated; −δ_c alone for an equality).
+    fn diagonals(
+        &self,
+        sx: &[f64],
+        ss: &[f64],
+        delta_w: f64,
+        delta_c: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let primal = (0..self.n)
+            .map(|i| if self.fixed[i] { 1.0 } else { sx[i] + delta_w })
+            .collect();
+        let dual = (0..self.m)
+            .map(|i| {
+                -delta_c
+                    - if self.sb[i].is_some() {
+                        1.0 / (ss[i] + delta_w)
+                    } else {
+                        0.0
+                    }
+            })
+            .collect();
+        (primal, dual)
     }
 
     /// Solves for the step from the factorized matrix given r_x, r_s and the constraint
@@ -954,6 +947,13 @@ impl<'a> Ipm<'a> {
             if on_iteration(&report) == IterationControl::Stop {
                 return SolveStatus::UserStop;
             }
+            if iteration > 0 {
+                if let Some(exit) = self.exit_test.as_mut() {
+                    if exit(&self.x) {
+                        return SolveStatus::UserStop;
+                    }
+                }
+            }
             if iteration >= self.options.max_iterations {
                 return SolveStatus::IterationLimit;
             }
@@ -1076,11 +1076,22 @@ impl<'a> Ipm<'a> {
                 first = false;
                 alpha *= 0.5;
                 if alpha < alpha_min {
-                    return SolveStatus::RestorationFailed;
+                    break;
                 }
             }
             let Some(trial) = accepted else {
-                return SolveStatus::RestorationFailed;
+                // No acceptable step: the feasibility-restoration phase.
+                if !self.allow_restoration {
+                    return SolveStatus::RestorationFailed;
+                }
+                filter.add((1.0 - GAMMA_THETA) * theta, phi - GAMMA_PHI * theta);
+                match self.restore(&filter, theta, &mut iteration, on_iteration) {
+                    Ok(()) => {
+                        last_step = 0.0;
+                        continue;
+                    }
+                    Err(status) => return status,
+                }
             };
             if !trial.f_type {
                 filter.add((1.0 - GAMMA_THETA) * theta, phi - GAMMA_PHI * theta);
@@ -1124,6 +1135,180 @@ impl<'a> Ipm<'a> {
                 return SolveStatus::EvaluationError;
             }
         }
+    }
+
+    /// IPOPT's feasibility-restoration phase: minimize the ℓ₁ constraint violation near the
+    /// current point ([`super::restoration`]) with this same method until the outer problem
+    /// has a point the filter accepts with θ reduced by 10 %, then reset the multipliers
+    /// there. `Err` ends the solve: [`SolveStatus::Infeasible`] when the violation cannot be
+    /// reduced (a local minimizer of it that is not feasible).
+    fn restore(
+        &mut self,
+        filter: &Filter,
+        theta: f64,
+        iteration: &mut usize,
+        on_iteration: &mut dyn FnMut(&IterationReport) -> IterationControl,
+    ) -> std::result::Result<(), SolveStatus> {
+        let (n, m) = (self.n, self.m);
+        let mut c = vec![0.0; m];
+        self.residual(&self.g, &self.s, &mut c);
+        let slack_bounds: Vec<Option<(f64, f64)>> = self
+            .sb
+            .iter()
+            .map(|b| {
+                b.map(|b| {
+                    (
+                        b.lower.unwrap_or(f64::NEG_INFINITY),
+                        b.upper.unwrap_or(f64::INFINITY),
+                    )
+                })
+            })
+            .collect();
+        let problem = self.prob.problem;
+        let resto = Restoration::new(
+            problem,
+            &self.prob.sg,
+            &self.rhs,
+            &slack_bounds,
+            &self.x,
+            &self.s,
+            &c,
+            self.mu,
+        );
+        let options = SolveOptions {
+            max_iterations: self.options.max_iterations.saturating_sub(*iteration),
+            warm_start: None,
+            ..self.options.clone()
+        };
+        // The outer problem at a restoration iterate: θ and φ_μ, for the exit test.
+        let (xb, sb, rhs, sg, sf, mu) = (
+            self.xb.clone(),
+            self.sb.clone(),
+            self.rhs.clone(),
+            self.prob.sg.clone(),
+            self.prob.sf,
+            self.mu,
+        );
+        let outer = move |x: &[f64], s: &[f64]| -> Option<(f64, f64)> {
+            let f = problem.objective(x).ok()? * sf;
+            let mut g = vec![0.0; m];
+            problem.constraints(x, &mut g).ok()?;
+            let mut theta = 0.0;
+            for i in 0..m {
+                let b = if sb[i].is_some() { s[i] } else { rhs[i] };
+                theta += (sg[i] * g[i] - b).abs();
+            }
+            let phi = barrier_value(&xb, &sb, mu, f, x, s);
+            (theta.is_finite() && phi.is_finite()).then_some((theta, phi))
+        };
+        let filter_copy = Filter(filter.0.clone());
+        let exited = std::cell::Cell::new(false);
+        let accept = |theta_t: f64, phi_t: f64| {
+            theta_t <= 0.9 * theta && filter_copy.acceptable(theta_t, phi_t)
+        };
+        let user_stop = std::cell::Cell::new(false);
+        let base = *iteration;
+        let solution = {
+            let mut inner = Ipm::new(&resto, &options);
+            inner.allow_restoration = false;
+            let resto_ref = &resto;
+            let outer_ref = &outer;
+            let accept_ref = &accept;
+            let exited_ref = &exited;
+            inner.exit_test = Some(Box::new(move |w: &[f64]| {
+                let x = resto_ref.x(w);
+                let s = resto_ref.slacks(w);
+                let hit = outer_ref(x, &s).is_some_and(|(t, p)| accept_ref(t, p));
+                exited_ref.set(hit);
+                hit
+            }));
+            inner.run(&mut |r| {
+                if r.iteration == 0 {
+                    return IterationControl::Continue;
+                }
+                let report = IterationReport {
+                    iteration: base + r.iteration,
+                    restoration: true,
+                    ..*r
+                };
+                let control = on_iteration(&report);
+                if control == IterationControl::Stop {
+                    user_stop.set(true);
+                }
+                control
+            })
+        };
+        let stats = solution.statistics;
+        self.prob.time += stats.evaluation_time;
+        let counts = &mut self.prob.counts;
+        counts.objective += stats.evaluation_counts.objective;
+        counts.gradient += stats.evaluation_counts.gradient;
+        counts.constraints += stats.evaluation_counts.constraints;
+        counts.jacobian += stats.evaluation_counts.jacobian;
+        counts.hessian += stats.evaluation_counts.hessian;
+        // The restoration's iterations (reported with `restoration: true`), and its return to
+        // the outer problem as one more (so the callback's numbers keep increasing).
+        *iteration += stats.iterations + 1;
+        self.iterations = *iteration;
+        if user_stop.get() {
+            return Err(SolveStatus::UserStop);
+        }
+        let w = &solution.x;
+        let x_new = resto.x(w).to_vec();
+        let s_new = resto.slacks(w);
+        let done = exited.get()
+            || (solution.status.is_success()
+                && outer(&x_new, &s_new).is_some_and(|(t, p)| accept(t, p)));
+        if !done {
+            return Err(match solution.status {
+                // The violation has a local minimizer that is not feasible.
+                SolveStatus::Optimal | SolveStatus::Acceptable => SolveStatus::Infeasible,
+                SolveStatus::IterationLimit => SolveStatus::IterationLimit,
+                SolveStatus::TimeLimit => SolveStatus::TimeLimit,
+                _ => SolveStatus::RestorationFailed,
+            });
+        }
+        // Back in the outer problem: strictly inside the bounds, bound multipliers centred at μ,
+        // constraint multipliers by least squares.
+        for i in 0..n {
+            self.x[i] = if self.fixed[i] {
+                self.x[i]
+            } else {
+                project(x_new[i], self.xb[i], 1e-8)
+            };
+        }
+        for i in 0..m {
+            if let Some(b) = self.sb[i] {
+                self.s[i] = project(s_new[i], b, 1e-8);
+            }
+        }
+        self.evaluate_point()
+            .map_err(|_| SolveStatus::EvaluationError)?;
+        self.evaluate_derivatives(false)
+            .map_err(|_| SolveStatus::EvaluationError)?;
+        let mu = self.mu;
+        for i in 0..n {
+            let b = self.xb[i];
+            if let Some(l) = b.lower {
+                self.zl[i] = mu / (self.x[i] - l);
+            }
+            if let Some(u) = b.upper {
+                self.zu[i] = mu / (u - self.x[i]);
+            }
+        }
+        for i in 0..m {
+            if let Some(b) = self.sb[i] {
+                if let Some(l) = b.lower {
+                    self.vl[i] = mu / (self.s[i] - l);
+                }
+                if let Some(u) = b.upper {
+                    self.vu[i] = mu / (u - self.s[i]);
+                }
+            }
+        }
+        self.y.fill(0.0);
+        self.least_squares_multipliers();
+        Ok(())
     }
 
     /// The filter acceptance test: `Some(f_type)` if the trial point is accepted.
@@ -1268,6 +1453,46 @@ impl<'a> Ipm<'a> {
             x: std::mem::take(&mut self.x),
         }
     }
+}
+
+/// The barrier objective φ_μ = f − μ Σ ln(slack) (+ IPOPT's damping of one-sided bounds) at
+/// (x, s), for the bounds `xb` of x and `sb` of the inequality slacks.
+fn barrier_value(
+    xb: &[Bounds],
+    sb: &[Option<Bounds>],
+    mu: f64,
+    f: f64,
+    x: &[f64],
+    s: &[f64],
+) -> f64 {
+    let mut phi = f;
+    let mut term = |slack: f64, one_sided: bool| {
+        phi -= mu * slack.ln();
+        if one_sided {
+            phi += KAPPA_D * mu * slack;
+        }
+    };
+    for (i, b) in xb.iter().enumerate() {
+        let one = b.lower.is_some() != b.upper.is_some();
+        if let Some(l) = b.lower {
+            term(x[i] - l, one);
+        }
+        if let Some(u) = b.upper {
+            term(u - x[i], one);
+        }
+    }
+    for (i, b) in sb.iter().enumerate() {
+        if let Some(b) = b {
+            let one = b.lower.is_some() != b.upper.is_some();
+            if let Some(l) = b.lower {
+                term(s[i] - l, one);
+            }
+            if let Some(u) = b.upper {
+                term(u - s[i], one);
+            }
+        }
+    }
+    phi
 }
 
 /// Moves v inside its bounds by IPOPT's bound push (relative to the bound and the gap).
@@ -1444,9 +1669,11 @@ mod tests {
     }
 
     #[test]
-    fn an_infeasible_problem_ends_without_success() {
+    fn an_infeasible_problem_is_reported_infeasible() {
         let s = solve(&DenseAdProblem::new(Infeasible), &native()).unwrap();
-        assert!(!s.status.is_success(), "{:?}", s.status);
+        // The restoration phase converges to x = 0, the least violation (x² + 1 ≥ 1 > 0).
+        assert_eq!(s.status, SolveStatus::Infeasible);
+        assert!(s.x[0].abs() < 1e-3, "{:?}", s.x);
         assert!(s.statistics.primal_infeasibility >= 1.0 - 1e-9);
     }
 
@@ -1471,5 +1698,55 @@ mod tests {
         .unwrap();
         assert_eq!(stopped.status, SolveStatus::UserStop);
         assert_eq!(stopped.statistics.iterations, 2);
+    }
+
+    /// Hock–Schittkowski 27 from its standard start: the line search gets stuck far from the
+    /// optimum (f* = 0.04 at (−1, 1, 0)) and only the restoration phase gets it out.
+    struct Hs27;
+
+    impl AdModel for Hs27 {
+        fn num_variables(&self) -> usize {
+            3
+        }
+        fn num_constraints(&self) -> usize {
+            1
+        }
+        fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+            lower.fill(f64::NEG_INFINITY);
+            upper.fill(f64::INFINITY);
+        }
+        fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+            lower[0] = 0.0;
+            upper[0] = 0.0;
+        }
+        fn initial_point(&self, x0: &mut [f64]) {
+            x0.fill(2.0);
+        }
+        fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
+            (x[0] - 1.0).powi(2) * 0.01 + (x[1] - x[0] * x[0]).powi(2)
+        }
+        fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
+            g[0] = x[0] + x[2] * x[2] + 1.0;
+        }
+    }
+
+    #[test]
+    fn the_restoration_phase_rescues_a_stuck_line_search() {
+        let mut reports = Vec::new();
+        let s = solve_with_callback(&DenseAdProblem::new(Hs27), &native(), &mut |r| {
+            reports.push(*r);
+            IterationControl::Continue
+        })
+        .unwrap();
+        let restoring = reports.iter().filter(|r| r.restoration).count();
+        println!(
+            "HS27: {:?} in {} iterations ({restoring} in restoration), f = {}",
+            s.status, s.statistics.iterations, s.statistics.objective
+        );
+        assert_eq!(s.status, SolveStatus::Optimal);
+        assert!((s.statistics.objective - 0.04).abs() < 1e-8);
+        assert!(restoring > 0);
+        assert!(reports.windows(2).all(|w| w[1].iteration > w[0].iteration));
+        assert_eq!(reports.last().unwrap().iteration, s.statistics.iterations);
     }
 }

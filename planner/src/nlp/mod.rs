@@ -16,7 +16,8 @@
 //!   forward-mode AD ([`ad::DenseAdProblem`]).
 //! * [`check`]: compare any problem's derivatives with finite differences (tests only;
 //!   no solve loop uses finite differences).
-//! * `ipm` / `kkt` (private; [`NativeSolver`]): the native interior point and its KKT system.
+//! * `ipm` / `kkt` / `restoration` (private; [`NativeSolver`]): the native interior point, its
+//!   KKT system and its feasibility-restoration problem.
 //! * [`lanes`]: a real type of L lanes, so that one evaluation carries L dual seeds (the
 //!   collocation problem's Jacobian columns and Hessian pairs, four at a time).
 //!
@@ -37,10 +38,10 @@
 //!   five-link problem, `shared/PLANNER-NOTES.md`).
 //! - **our own interior point** ([`NativeSolver`], [`Backend::Native`], built December 2026):
 //!   IPOPT's algorithm (filter line search, second-order corrections, monotone barrier update,
-//!   inertia correction) on a condensed KKT system factorized by feral, the LDLᵀ under ripopt.
-//!   It reaches the same 50 of 57 Hock–Schittkowski optima (a different 7: it has no
-//!   restoration phase) and plans ADAM in 40 + 78 iterations to the same gait, but no faster:
-//!   feral's factorization is still most of the time. faer's sparse LDLᵀ, the other candidate,
+//!   inertia correction, ℓ₁ feasibility restoration) on a condensed KKT system factorized by
+//!   feral, the LDLᵀ under ripopt. It reaches 51 of 57 Hock–Schittkowski optima (ripopt 50)
+//!   and plans ADAM in 40 + 78 iterations to the same gait, but no faster: feral's
+//!   factorization is still most of the time. faer's sparse LDLᵀ, the other candidate,
 //!   does not pivot across supernodes and breaks down on these KKT matrices (`planner/NLP.md`).
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
@@ -112,12 +113,14 @@
 //! warm starts keep ripopt the default. The native backend was then written for speed
 //! (issue #3: it owns its KKT system, so a faster factorization can be put under it) and
 //! as an independent cross-check; it matches ripopt's iterations and results, not yet its
-//! robustness (no restoration phase: the planner re-solves such a stage with ripopt), and
-//! with the same factorization it is no faster (`planner/NLP.md`, "Native interior point").
+//! robustness everywhere (its restoration phase is young: the planner re-solves a stage whose
+//! restoration fails with ripopt), and with the same factorization it is no faster
+//! (`planner/NLP.md`, "Native interior point").
 
 mod ipm;
 mod kkt;
 mod problem;
+mod restoration;
 mod ripopt_backend;
 mod solver;
 mod validate;

@@ -180,8 +180,8 @@ pub enum Backend {
     /// method (filter line search, sparse LDLᵀ with inertia correction). EPL-2.0.
     #[default]
     Ripopt,
-    /// Our own primal–dual interior point ([`super::NativeSolver`]): IPOPT's filter line search on a
-    /// condensed KKT system factorized by feral's LDLᵀ, without a restoration phase.
+    /// Our own primal–dual interior point ([`super::NativeSolver`]): IPOPT's filter line search
+    /// and restoration phase on a condensed KKT system factorized by feral's LDLᵀ.
     Native,
 }
 
