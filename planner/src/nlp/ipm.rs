@@ -1520,45 +1520,10 @@ mod tests {
     use num_dual::DualNum;
 
     use crate::nlp::ad::{AdModel, DenseAdProblem};
+    use crate::nlp::test_problems::Hs71;
     use crate::nlp::{
         solve, solve_with_callback, Backend, IterationControl, SolveOptions, SolveStatus,
     };
-
-    /// Hock–Schittkowski 71 (f* = 17.0140173 at x ≈ (1, 4.743, 3.8211, 1.3794)), optionally
-    /// with x₀ fixed at its optimal value 1 by equal bounds.
-    struct Hs71 {
-        fix_first: bool,
-    }
-
-    impl AdModel for Hs71 {
-        fn num_variables(&self) -> usize {
-            4
-        }
-        fn num_constraints(&self) -> usize {
-            2
-        }
-        fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-            lower.fill(1.0);
-            upper.fill(5.0);
-            if self.fix_first {
-                upper[0] = 1.0;
-            }
-        }
-        fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-            lower.copy_from_slice(&[25.0, 40.0]);
-            upper.copy_from_slice(&[f64::INFINITY, 40.0]);
-        }
-        fn initial_point(&self, x0: &mut [f64]) {
-            x0.copy_from_slice(&[1.0, 5.0, 5.0, 1.0]);
-        }
-        fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
-            x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2]
-        }
-        fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
-            g[0] = x[0] * x[1] * x[2] * x[3];
-            g[1] = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3];
-        }
-    }
 
     fn native() -> SolveOptions {
         SolveOptions {
@@ -1569,7 +1534,7 @@ mod tests {
 
     #[test]
     fn hs71_optimum_and_multipliers_agree_with_ripopt() {
-        let problem = DenseAdProblem::new(Hs71 { fix_first: false });
+        let problem = DenseAdProblem::new(Hs71::standard());
         let ours = solve(&problem, &native()).unwrap();
         let reference = solve(&problem, &SolveOptions::default()).unwrap();
         assert_eq!(ours.status, SolveStatus::Optimal);
@@ -1606,7 +1571,7 @@ mod tests {
 
     #[test]
     fn a_warm_start_from_the_optimum_converges_at_once() {
-        let problem = DenseAdProblem::new(Hs71 { fix_first: false });
+        let problem = DenseAdProblem::new(Hs71::standard());
         let cold = solve(&problem, &native()).unwrap();
         let warm = solve(
             &problem,
@@ -1632,7 +1597,10 @@ mod tests {
 
     #[test]
     fn a_fixed_variable_stays_at_its_value() {
-        let problem = DenseAdProblem::new(Hs71 { fix_first: true });
+        let problem = DenseAdProblem::new(Hs71 {
+            lower_bound: 1.0,
+            fix_first: true,
+        });
         let s = solve(&problem, &native()).unwrap();
         assert_eq!(s.status, SolveStatus::Optimal);
         assert_eq!(s.x[0], 1.0);
@@ -1679,7 +1647,7 @@ mod tests {
 
     #[test]
     fn the_callback_sees_each_iteration_and_can_stop() {
-        let problem = DenseAdProblem::new(Hs71 { fix_first: false });
+        let problem = DenseAdProblem::new(Hs71::standard());
         let mut seen = Vec::new();
         let full = solve_with_callback(&problem, &native(), &mut |r| {
             seen.push(r.iteration);

@@ -123,6 +123,8 @@ mod problem;
 mod restoration;
 mod ripopt_backend;
 mod solver;
+#[cfg(test)]
+mod test_problems;
 mod validate;
 
 pub mod ad;

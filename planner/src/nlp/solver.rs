@@ -343,45 +343,12 @@ fn validate_options(options: &SolveOptions) -> Result<()> {
 mod tests {
     #![allow(clippy::unwrap_used)]
 
-    use num_dual::DualNum;
-
     use super::*;
-    use crate::nlp::ad::{AdModel, DenseAdProblem};
-
-    /// Hock–Schittkowski 71: f* = 17.0140173 at (1, 4.743, 3.8211, 1.3794).
-    struct Hs71 {
-        lower_bound: f64,
-    }
-
-    impl AdModel for Hs71 {
-        fn num_variables(&self) -> usize {
-            4
-        }
-        fn num_constraints(&self) -> usize {
-            2
-        }
-        fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-            lower.fill(self.lower_bound);
-            upper.fill(5.0);
-        }
-        fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-            lower.copy_from_slice(&[25.0, 40.0]);
-            upper.copy_from_slice(&[f64::INFINITY, 40.0]);
-        }
-        fn initial_point(&self, x0: &mut [f64]) {
-            x0.copy_from_slice(&[1.0, 5.0, 5.0, 1.0]);
-        }
-        fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
-            x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2]
-        }
-        fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
-            g[0] = x[0] * x[1] * x[2] * x[3];
-            g[1] = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3];
-        }
-    }
+    use crate::nlp::ad::DenseAdProblem;
+    use crate::nlp::test_problems::Hs71;
 
     fn hs71() -> DenseAdProblem<Hs71> {
-        DenseAdProblem::new(Hs71 { lower_bound: 1.0 })
+        DenseAdProblem::new(Hs71::standard())
     }
 
     #[test]
@@ -482,7 +449,10 @@ mod tests {
 
     #[test]
     fn malformed_input_is_rejected_with_a_typed_error() {
-        let crossed = DenseAdProblem::new(Hs71 { lower_bound: 6.0 });
+        let crossed = DenseAdProblem::new(Hs71 {
+            lower_bound: 6.0,
+            fix_first: false,
+        });
         assert_eq!(
             solve(&crossed, &SolveOptions::default()),
             Err(NlpError::InvalidBounds {
