@@ -36,6 +36,8 @@ pub(super) struct Restoration<'a> {
     diagonal_slots: Vec<usize>,
     /// Number of the outer problem's Hessian entries (the first slots).
     outer_hessian: usize,
+    /// Row of each of the outer problem's Jacobian entries (the first slots).
+    outer_jacobian_rows: Vec<usize>,
     hessian: SparsityPattern,
 }
 
@@ -110,6 +112,7 @@ impl<'a> Restoration<'a> {
             rho,
             diagonal_slots,
             outer_hessian,
+            outer_jacobian_rows: problem.jacobian_structure().rows,
             hessian,
         }
     }
@@ -209,11 +212,10 @@ impl NlpProblem for Restoration<'_> {
     }
 
     fn jacobian_values(&self, w: &[f64], values: &mut [f64]) -> Result<(), DomainError> {
-        let outer = self.problem.jacobian_structure();
-        let len = outer.len();
+        let len = self.outer_jacobian_rows.len();
         self.problem
             .jacobian_values(&w[..self.n], &mut values[..len])?;
-        for (v, &r) in values[..len].iter_mut().zip(&outer.rows) {
+        for (v, &r) in values[..len].iter_mut().zip(&self.outer_jacobian_rows) {
             *v *= self.sg[r];
         }
         let mut k = len;
