@@ -36,6 +36,9 @@ pub struct StageReport {
     pub solve_time_s: f64,
     /// Wall time spent evaluating the problem (derivatives included), s.
     pub evaluation_time_s: f64,
+    /// The backend that finished the solve (ripopt after a native solve whose restoration
+    /// failed).
+    pub backend: nlp::Backend,
 }
 
 impl StageReport {
@@ -99,6 +102,46 @@ pub(crate) fn solve_stage(
     let attempt =
         solve_stage_attempt(problem, stage, config, None, Guards::default(), on_progress)?;
     attempt.into_result()
+}
+
+/// What the gait file says solved it: the backend, or each stage's where they differ.
+fn solver_description(stages: &[StageReport]) -> String {
+    let name = |b: nlp::Backend| match b {
+        nlp::Backend::Native => "native interior point (planner::nlp, feral LDLᵀ)",
+        _ => "ripopt 0.8 interior point via planner::nlp",
+    };
+    match stages.first() {
+        Some(first) if stages.iter().all(|s| s.backend == first.backend) => {
+            name(first.backend).into()
+        }
+        None => name(nlp::Backend::default()).into(),
+        Some(_) => stages
+            .iter()
+            .map(|s| format!("{}: {}", s.stage, name(s.backend)))
+            .collect::<Vec<_>>()
+            .join("; "),
+    }
+}
+
+/// Whether a stage the native interior point ended with `status` is solved again by ripopt:
+/// when the native restoration phase or its linear algebra failed (ripopt's restoration is the
+/// more seasoned), unless the caller drops starts that need restoration anyway or the solve
+/// was stopped on purpose (`stopped`: the iteration cap or the stall guard).
+fn retry_with_ripopt(
+    backend: nlp::Backend,
+    status: nlp::SolveStatus,
+    guards: Guards,
+    stopped: bool,
+) -> bool {
+    backend == nlp::Backend::Native
+        && matches!(
+            status,
+            nlp::SolveStatus::RestorationFailed
+                | nlp::SolveStatus::NumericalError
+                | nlp::SolveStatus::TinyStep
+        )
+        && !guards.abandon_restoration
+        && !stopped
 }
 
 /// When [`solve_stage_attempt`] gives up on a solve before the solver does (the default: never;
@@ -240,17 +283,7 @@ pub(crate) fn solve_stage_attempt(
             s.evaluation_time += e.evaluation_time;
             s.solver_time += e.solver_time;
         }
-        // Where the native interior point's restoration phase or its linear algebra fails, the
-        // stage is solved again by ripopt (a second, more seasoned restoration), unless the
-        // caller drops such starts anyway.
-        let native_gave_up = options.backend == nlp::Backend::Native
-            && matches!(
-                sol.status,
-                nlp::SolveStatus::RestorationFailed
-                    | nlp::SolveStatus::NumericalError
-                    | nlp::SolveStatus::TinyStep
-            );
-        if !native_gave_up || guards.abandon_restoration || capped || stalled {
+        if !retry_with_ripopt(options.backend, sol.status, guards, capped || stalled) {
             break sol;
         }
         earlier = Some(sol.statistics);
@@ -270,6 +303,7 @@ pub(crate) fn solve_stage_attempt(
         violation,
         solve_time_s: sol.statistics.total_time.as_secs_f64(),
         evaluation_time_s: sol.statistics.evaluation_time.as_secs_f64(),
+        backend: options.backend,
     };
     // The feasibility stage only has to deliver a feasible start for the second: a point that
     // satisfies every constraint is kept even if the solver stopped on a numerical status.
@@ -478,7 +512,7 @@ pub fn gait_from_solution(
         initial_state: Some(RobotState { q, dq }),
         feedforward: Some(feedforward_table(problem, x)),
         solver: SolverSummary {
-            solver: "ripopt 0.8 interior point via planner::nlp".into(),
+            solver: solver_description(stages),
             status: stages.last().map(|s| s.status.clone()).unwrap_or_default(),
             iterations: stages.iter().map(|s| s.iterations).sum(),
             solve_time_s: stages.iter().map(|s| s.solve_time_s).sum(),
@@ -486,4 +520,62 @@ pub fn gait_from_solution(
             constraint_violation: problem.max_violation(x),
         },
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nlp::{Backend, SolveStatus};
+
+    #[test]
+    fn only_a_failed_native_restoration_or_factorization_goes_back_to_ripopt() {
+        let free = Guards::default();
+        for status in [
+            SolveStatus::RestorationFailed,
+            SolveStatus::NumericalError,
+            SolveStatus::TinyStep,
+        ] {
+            assert!(retry_with_ripopt(Backend::Native, status, free, false));
+            // ripopt's own failures, a start the caller drops, a solve stopped on purpose: no.
+            assert!(!retry_with_ripopt(Backend::Ripopt, status, free, false));
+            let dropping = Guards {
+                abandon_restoration: true,
+                ..Guards::default()
+            };
+            assert!(!retry_with_ripopt(Backend::Native, status, dropping, false));
+            assert!(!retry_with_ripopt(Backend::Native, status, free, true));
+        }
+        for status in [
+            SolveStatus::Optimal,
+            SolveStatus::Acceptable,
+            SolveStatus::Infeasible,
+            SolveStatus::IterationLimit,
+            SolveStatus::UserStop,
+        ] {
+            assert!(!retry_with_ripopt(Backend::Native, status, free, false));
+        }
+    }
+
+    #[test]
+    fn the_gait_file_names_the_backend_of_each_stage_when_they_differ() {
+        let stage = |stage, backend| StageReport {
+            stage,
+            backend,
+            ..StageReport::default()
+        };
+        let native = solver_description(&[
+            stage(FEASIBILITY, Backend::Native),
+            stage("cost of transport", Backend::Native),
+        ]);
+        assert_eq!(native, "native interior point (planner::nlp, feral LDLᵀ)");
+        let mixed = solver_description(&[
+            stage(FEASIBILITY, Backend::Native),
+            stage("cost of transport", Backend::Ripopt),
+        ]);
+        assert!(
+            mixed.starts_with("feasibility: native") && mixed.contains("cost of transport: ripopt"),
+            "{mixed}"
+        );
+        assert!(solver_description(&[]).starts_with("ripopt"));
+    }
 }

@@ -346,6 +346,12 @@ fn the_native_backend_plans_a_gait_that_verifies() {
         assert!(s.violation < 1e-6, "{}: violation {}", s.stage, s.violation);
     }
     let g = &a.gait;
+    // Both stages by the native backend alone (no re-solve by ripopt), and the file says so.
+    assert!(
+        g.solver.solver.starts_with("native interior point"),
+        "{}",
+        g.solver.solver
+    );
     assert!(
         (g.cost_of_transport / 0.020842 - 1.0).abs() < 5e-3,
         "CoT {}",
