@@ -1189,10 +1189,18 @@ impl<'a> Ipm<'a> {
             self.prob.sf,
             self.mu,
         );
-        let outer = move |x: &[f64], s: &[f64]| -> Option<(f64, f64)> {
-            let f = problem.objective(x).ok()? * sf;
+        // Its evaluations count as the solve's evaluations (time and calls).
+        let outer_time = std::cell::Cell::new(Duration::ZERO);
+        let outer_calls = std::cell::Cell::new(0usize);
+        let outer = |x: &[f64], s: &[f64]| -> Option<(f64, f64)> {
+            let t = Instant::now();
+            outer_calls.set(outer_calls.get() + 1);
+            let f = problem.objective(x);
             let mut g = vec![0.0; m];
-            problem.constraints(x, &mut g).ok()?;
+            let g_ok = problem.constraints(x, &mut g);
+            outer_time.set(outer_time.get() + t.elapsed());
+            let f = f.ok()? * sf;
+            g_ok.ok()?;
             let mut theta = 0.0;
             for i in 0..m {
                 let b = if sb[i].is_some() { s[i] } else { rhs[i] };
@@ -1250,15 +1258,18 @@ impl<'a> Ipm<'a> {
         // the outer problem as one more (so the callback's numbers keep increasing).
         *iteration += stats.iterations + 1;
         self.iterations = *iteration;
-        if user_stop.get() {
-            return Err(SolveStatus::UserStop);
-        }
         let w = &solution.x;
         let x_new = resto.x(w).to_vec();
         let s_new = resto.slacks(w);
         let done = exited.get()
             || (solution.status.is_success()
                 && outer(&x_new, &s_new).is_some_and(|(t, p)| accept(t, p)));
+        self.prob.time += outer_time.get();
+        self.prob.counts.objective += outer_calls.get();
+        self.prob.counts.constraints += outer_calls.get();
+        if user_stop.get() {
+            return Err(SolveStatus::UserStop);
+        }
         if !done {
             return Err(match solution.status {
                 // The violation has a local minimizer that is not feasible.
@@ -1429,7 +1440,12 @@ impl<'a> Ipm<'a> {
             if let Some(k) = &self.kkt {
                 eprintln!(
                     "kkt: {} factorizations {:?}, {} solves {:?}; total {:?}, eval {:?}",
-                    k.stats.0, k.stats.1, k.stats.2, k.stats.3, total, self.prob.time
+                    k.stats.factorizations,
+                    k.stats.factorization_time,
+                    k.stats.solves,
+                    k.stats.solve_time,
+                    total,
+                    self.prob.time
                 );
             }
         }

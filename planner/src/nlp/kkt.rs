@@ -28,6 +28,15 @@ pub(crate) struct Inertia {
     pub zero: usize,
 }
 
+/// What a [`KktSystem`] has done: factorizations and solves, and the wall time in each.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct KktStats {
+    pub factorizations: usize,
+    pub factorization_time: std::time::Duration,
+    pub solves: usize,
+    pub solve_time: std::time::Duration,
+}
+
 /// The KKT matrix of one solve: fixed pattern, fresh values per factorization.
 pub(crate) struct KktSystem {
     n: usize,
@@ -47,8 +56,8 @@ pub(crate) struct KktSystem {
     workspace: FactorWorkspace,
     params: NumericParams,
     factors: Option<SparseFactors>,
-    /// Factorizations, the time in them, solves, the time in them.
-    pub stats: (usize, std::time::Duration, usize, std::time::Duration),
+    /// Work done so far (printed by the interior point at print level 5).
+    pub stats: KktStats,
 }
 
 impl KktSystem {
@@ -160,8 +169,8 @@ impl KktSystem {
     pub fn factorize(&mut self) -> Option<Inertia> {
         let t = std::time::Instant::now();
         let r = self.factorize_inner();
-        self.stats.0 += 1;
-        self.stats.1 += t.elapsed();
+        self.stats.factorizations += 1;
+        self.stats.factorization_time += t.elapsed();
         r
     }
 
@@ -211,8 +220,8 @@ impl KktSystem {
     pub fn solve(&mut self, rhs: &[f64], refinements: usize) -> Option<Vec<f64>> {
         let t = std::time::Instant::now();
         let r = self.solve_inner(rhs, refinements);
-        self.stats.2 += 1;
-        self.stats.3 += t.elapsed();
+        self.stats.solves += 1;
+        self.stats.solve_time += t.elapsed();
         r
     }
 
