@@ -890,8 +890,10 @@ impl<P: JointPlant> SimBus<P> {
         let f = self.wire_faults;
         if f.delay_probability > 0.0 && self.fault_rng.random::<f64>() < f.delay_probability {
             self.wire_stats.delayed += 1;
-            let arrival = bits_to_duration(bits[bus], self.config.bitrate_bps)
-                + Duration::from_secs_f64(f.delay_s);
+            // A delay too long for a Duration (validated finite and ≥ 0) is late anyway.
+            let delay = Duration::try_from_secs_f64(f.delay_s).unwrap_or(Duration::MAX);
+            let arrival =
+                bits_to_duration(bits[bus], self.config.bitrate_bps).saturating_add(delay);
             if arrival > budget {
                 self.wire_stats.delayed_late += 1;
                 return None;
@@ -1415,7 +1417,8 @@ mod tests {
     #[test]
     fn a_delayed_reply_is_missing_only_past_the_budget() {
         let cmds = [Command::damping(id(1), 1.0)];
-        for (delay_s, late) in [(0.5e-3, false), (1.5e-3, true)] {
+        // 1e300 s does not fit a Duration: late, not a panic.
+        for (delay_s, late) in [(0.5e-3, false), (1.5e-3, true), (1e300, true)] {
             let mut bus = sim(1, 1, 0.0, 22);
             active(&mut bus);
             bus.set_wire_faults(WireFaults {

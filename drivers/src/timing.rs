@@ -235,8 +235,9 @@ pub struct BusBudget {
 /// A loop rate the buses cannot carry, or a meaningless argument.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]
 pub enum TimingError {
-    /// The loop rate is not a positive finite number.
-    #[error("loop rate {rate_hz} Hz is not a positive finite number")]
+    /// The loop rate is not a positive finite number, or so small that its period does not
+    /// fit a [`Duration`].
+    #[error("loop rate {rate_hz} Hz is not a positive finite number with a representable period")]
     InvalidRate {
         /// Offending rate \[Hz\].
         rate_hz: f64,
@@ -297,6 +298,9 @@ pub fn validate_with(
         return Err(TimingError::InvalidBitrate { bitrate_bps });
     }
     let period_s = 1.0 / rate_hz;
+    let Ok(period) = Duration::try_from_secs_f64(period_s) else {
+        return Err(TimingError::InvalidRate { rate_hz });
+    };
     let bus_time = |s| exchange_time(bitrate_bps, s).as_secs_f64() * motors_per_bus as f64;
     let needed_s = bus_time(stuffing);
     if needed_s > period_s {
@@ -313,7 +317,7 @@ pub fn validate_with(
         });
     }
     Ok(BusBudget {
-        period: Duration::from_secs_f64(period_s),
+        period,
         bus_time_nominal: Duration::from_secs_f64(bus_time(Stuffing::None)),
         bus_time_worst: Duration::from_secs_f64(bus_time(Stuffing::WorstCase)),
         worst_utilization: bus_time(Stuffing::WorstCase) / period_s,
@@ -444,10 +448,17 @@ mod tests {
         assert!(text.contains("1080 µs"), "{text}");
         assert!(validate(925.0, 4, MBIT).is_ok());
         assert!(validate_with(1000.0, 4, MBIT, Stuffing::None).is_ok());
-        assert!(matches!(
-            validate(0.0, 1, MBIT),
-            Err(TimingError::InvalidRate { .. })
-        ));
+        // Zero, and rates so small that the period overflows a Duration (1e-320 Hz is a
+        // 1e320 s period; found by the hostile-input property test).
+        for rate_hz in [0.0, 1e-320, 1e-300, f64::MIN_POSITIVE] {
+            assert!(
+                matches!(
+                    validate(rate_hz, 1, MBIT),
+                    Err(TimingError::InvalidRate { .. })
+                ),
+                "{rate_hz}"
+            );
+        }
         assert!(matches!(
             validate(1000.0, 1, 2_000_000),
             Err(TimingError::InvalidBitrate { .. })

@@ -670,6 +670,15 @@ mod tests {
             e.contains("x.toml") && e.contains("loop.rate_hz") && e.contains("1500"),
             "{e}"
         );
+        // A rate so small that its period overflows a Duration: an error, not a panic.
+        let text = shipped().replace("rate_hz = 1000.0", "rate_hz = 1e-320");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("loop.rate_hz") && e.contains("representable"),
+            "{e}"
+        );
         let text = shipped().replace("schema_version = 1", "schema_version = 9");
         let e = RuntimeConfig::from_toml(&text, "x.toml")
             .unwrap_err()
