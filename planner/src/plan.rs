@@ -107,7 +107,7 @@ pub(crate) fn solve_stage(
 /// What the gait file says solved it: the backend, or each stage's where they differ.
 fn solver_description(stages: &[StageReport]) -> String {
     let name = |b: nlp::Backend| match b {
-        nlp::Backend::Native => "native interior point (planner::nlp, feral LDLᵀ)",
+        nlp::Backend::Native => "native interior point (planner::nlp, faer LDLᵀ)",
         _ => "ripopt 0.8 interior point via planner::nlp",
     };
     match stages.first() {
@@ -567,7 +567,7 @@ mod tests {
             stage(FEASIBILITY, Backend::Native),
             stage("cost of transport", Backend::Native),
         ]);
-        assert_eq!(native, "native interior point (planner::nlp, feral LDLᵀ)");
+        assert_eq!(native, "native interior point (planner::nlp, faer LDLᵀ)");
         let mixed = solver_description(&[
             stage(FEASIBILITY, Backend::Native),
             stage("cost of transport", Backend::Ripopt),

@@ -42,11 +42,11 @@ const KNOWN_FAILURES: &[(&str, &str)] = &[
 /// Where the native interior point (`Backend::Native`) does not reach the published optimum.
 const KNOWN_FAILURES_NATIVE: &[(&str, &str)] = &[
     ("HS2", "local minimum f = 4.9412 from the standard start (ripopt, IPOPT: same)"),
-    ("HS13", "degenerate (no constraint qualification at x* = (1, 0)): alternates between the line search and restoration up to the iteration limit, at f = 1.08 (ripopt stops at 0.994, IPOPT at 0.9946)"),
+    ("HS13", "degenerate (no constraint qualification at x* = (1, 0)): ends with a numerical error at f = 0.987, feasible to 2e-7 (ripopt stops at 0.994, IPOPT at 0.9946)"),
     ("HS20", "local minimum f = 40.199 at the mirror vertex (ripopt, IPOPT: same)"),
     ("HS44", "nonconvex bilinear: local minimum f = -13 (ripopt, IPOPT: same)"),
-    ("HS108", "degenerate: stops at f = -0.675 like ripopt"),
-    ("HS116", "reaches 97.58747 after a restoration phase, below the published 97.588409 and feasible: the better point ripopt finds too"),
+    ("HS108", "degenerate: converges to the non-optimal KKT point f = -0.5 (ripopt stops at -0.762)"),
+    ("HS116", "reaches 97.58747, below the published 97.588409 and feasible: the better point ripopt finds too"),
 ];
 
 thread_local! {

@@ -39,10 +39,11 @@
 //! - **our own interior point** ([`NativeSolver`], [`Backend::Native`], built December 2026):
 //!   IPOPT's algorithm (filter line search, second-order corrections, monotone barrier update,
 //!   inertia correction, ℓ₁ feasibility restoration) on a condensed KKT system factorized by
-//!   feral, the LDLᵀ under ripopt. It reaches 51 of 57 Hock–Schittkowski optima (ripopt 50)
-//!   and plans ADAM in 40 + 78 iterations to the same gait, but no faster: feral's
-//!   factorization is still most of the time. faer's sparse LDLᵀ, the other candidate,
-//!   does not pivot across supernodes and breaks down on these KKT matrices (`planner/NLP.md`).
+//!   faer's supernodal LDLᵀ on a matching-paired ordering from feral (`kkt`). It reaches 51 of
+//!   57 Hock–Schittkowski optima (ripopt 50) and plans ADAM in 43 + 78 iterations to the same
+//!   gait, `adam bench plan` median 1.61 s against ripopt's ~2.3 s (`planner/NLP.md`, fifth
+//!   round). ripopt stays the default until the native backend has been through the co-design
+//!   and the config sweeps again.
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
 //!   filter, and its own feasibility restoration; not attempted.
