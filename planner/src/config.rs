@@ -60,9 +60,9 @@ pub struct SolverConfig {
     pub tolerance: f64,
     /// Iteration limit per solve.
     pub max_iterations: usize,
-    /// The NLP backend: `"ripopt"` (default) or `"native"` (our own interior point,
+    /// The NLP backend: `"native"` (default: our own interior point,
     /// [`crate::nlp::NativeSolver`]; a stage whose restoration fails is solved again with
-    /// ripopt).
+    /// ripopt) or `"ripopt"`.
     #[serde(default)]
     pub backend: SolverBackend,
 }
@@ -72,9 +72,9 @@ pub struct SolverConfig {
 #[serde(rename_all = "lowercase")]
 pub enum SolverBackend {
     /// ripopt, the IPOPT port (`planner::nlp::Backend::Ripopt`).
-    #[default]
     Ripopt,
-    /// Our own interior point (`planner::nlp::Backend::Native`).
+    /// Our own interior point (`planner::nlp::Backend::Native`), the default.
+    #[default]
     Native,
 }
 
@@ -165,7 +165,7 @@ impl Default for PlannerConfig {
             solver: SolverConfig {
                 tolerance: 1e-6,
                 max_iterations: 500,
-                backend: SolverBackend::Ripopt,
+                backend: SolverBackend::Native,
             },
             codesign: CodesignConfig::default(),
         }
@@ -348,7 +348,7 @@ mod tests {
     }
 
     #[test]
-    fn the_backend_is_ripopt_unless_the_config_names_another() {
+    fn the_backend_is_native_unless_the_config_names_another() {
         let text = toml::to_string(&PlannerConfig::default()).expect("serializes");
         let without: String = text
             .lines()
@@ -356,11 +356,11 @@ mod tests {
             .map(|l| format!("{l}\n"))
             .collect();
         let cfg = PlannerConfig::from_toml(&without, "x.toml").expect("parses");
-        assert_eq!(cfg.solver.backend, SolverBackend::Ripopt);
-        let native = text.replace("backend = \"ripopt\"", "backend = \"native\"");
-        let cfg = PlannerConfig::from_toml(&native, "x.toml").expect("parses");
         assert_eq!(cfg.solver.backend, SolverBackend::Native);
-        let bad = text.replace("backend = \"ripopt\"", "backend = \"ipopt\"");
+        let ripopt = text.replace("backend = \"native\"", "backend = \"ripopt\"");
+        let cfg = PlannerConfig::from_toml(&ripopt, "x.toml").expect("parses");
+        assert_eq!(cfg.solver.backend, SolverBackend::Ripopt);
+        let bad = text.replace("backend = \"native\"", "backend = \"ipopt\"");
         let e = PlannerConfig::from_toml(&bad, "x.toml")
             .expect_err("rejected")
             .to_string();

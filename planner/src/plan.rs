@@ -576,6 +576,6 @@ mod tests {
             mixed.starts_with("feasibility: native") && mixed.contains("cost of transport: ripopt"),
             "{mixed}"
         );
-        assert!(solver_description(&[]).starts_with("ripopt"));
+        assert!(solver_description(&[]).starts_with("native"));
     }
 }

@@ -203,16 +203,18 @@ fn derivatives_are_bit_identical_in_parallel_and_sequentially() {
     assert_eq!(parallel, sequential);
 }
 
-/// With step durations of 0.6–0.7 s the first feasibility start falls into the solver's
+/// With step durations of 0.6–0.7 s ripopt's first feasibility start falls into its
 /// restoration phase (about a thousand nested iterations and 58 s before the guard). A start
 /// that needs restoration is dropped for the next one, so the whole feasibility stage stays
 /// within one start's iteration cap, counting every iteration the solver reports (restoration
-/// included), and the gait still satisfies Table I's shorter durations.
+/// included), and the gait still satisfies Table I's shorter durations. (The scenario is
+/// ripopt's: the native backend, the default, solves the first start in 45 iterations.)
 #[test]
 fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     use planner::plan::{Progress, FEASIBILITY_MAX_ITERATIONS};
     let (model, text, mut config) = setup();
     config.gait.step_duration_s = [0.6, 0.7];
+    config.solver.backend = planner::config::SolverBackend::Ripopt;
     let (mut starts, mut iterations) = (0, 0);
     let mut per_start: Vec<usize> = Vec::new();
     let mut in_feasibility = false;

@@ -23,13 +23,13 @@
 //!
 //! Multipliers follow IPOPT's convention: `L = σ f + λᵀ g`; bound multipliers are ≥ 0.
 //!
-//! ## Why ripopt is the default backend
+//! ## The backends: ripopt first, then our own (the default since December 2026)
 //!
 //! The HZD collocation NLP is nonconvex, equality-heavy and sparse (1258 variables, 1245
 //! constraints for ADAM): it needs a primal–dual interior point with a filter line search, an
 //! inertia-corrected sparse LDLᵀ and a restoration phase — what IPOPT does. The candidates, all
 //! pure Rust from crates.io (`shared/CRATES.md`):
-//! - **ripopt 0.8** (chosen): an IPOPT-class method with sparse LDLᵀ and inertia detection. It
+//! - **ripopt 0.8** (chosen first, the default until the fifth round): an IPOPT-class method with sparse LDLᵀ and inertia detection. It
 //!   reproduced IPOPT's iteration counts on a pendulum swing-up (152–4502 variables) and here
 //!   solves 50 of 57 Hock–Schittkowski problems to their published optima (the 7 others listed
 //!   with reasons in `tests/hock_schittkowski.rs`: IPOPT stops at the same points on HS2, HS13,
@@ -42,8 +42,8 @@
 //!   faer's supernodal LDLᵀ on a matching-paired ordering from feral (`kkt`). It reaches 51 of
 //!   57 Hock–Schittkowski optima (ripopt 50) and plans ADAM in 43 + 78 iterations to the same
 //!   gait, `adam bench plan` median 1.61 s against ripopt's ~2.3 s (`planner/NLP.md`, fifth
-//!   round). ripopt stays the default until the native backend has been through the co-design
-//!   and the config sweeps again.
+//!   round). The default since then; ripopt stays as the cross-check and as the fallback
+//!   where the native restoration phase fails.
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
 //!   filter, and its own feasibility restoration; not attempted.
@@ -95,9 +95,9 @@
 //! # Ok::<(), planner::nlp::NlpError>(())
 //! ```
 //!
-//! ## Why ripopt (measured, 2 cores, release build; details in `planner/NLP.md`)
+//! ## Why ripopt first (measured, 2 cores, release build; details in `planner/NLP.md`)
 //!
-//! The default backend is [`ripopt`] 0.8.2, a pure-Rust port of IPOPT's algorithm
+//! The first backend was [`ripopt`] 0.8.2, a pure-Rust port of IPOPT's algorithm
 //! (filter line search, adaptive barrier, inertia-corrected sparse LDLᵀ). Licence
 //! **EPL-2.0** (as IPOPT): a weak copyleft on ripopt's own files, compatible with
 //! linking from our MIT/Apache code. It was evaluated against IPOPT 3.14 + MUMPS
@@ -111,12 +111,13 @@
 //!   objective to 9 digits, 0.035 s / 0.111 s — ripopt is about 1.4× slower there.
 //!
 //! Same iteration counts as IPOPT, no system libraries, exact-Hessian support and
-//! warm starts keep ripopt the default. The native backend was then written for speed
+//! warm starts made ripopt the first default. The native backend was then written for speed
 //! (issue #3: it owns its KKT system, so a faster factorization can be put under it) and
-//! as an independent cross-check; it matches ripopt's iterations and results, not yet its
-//! robustness everywhere (its restoration phase is young: the planner re-solves a stage whose
-//! restoration fails with ripopt), and with the same factorization it is no faster
-//! (`planner/NLP.md`, "Native interior point").
+//! as an independent cross-check. With feral's factorization it matched ripopt's iterations
+//! and was no faster; with faer's LDLᵀ on a paired ordering (`kkt`) it plans ADAM 1.4× faster
+//! than ripopt to the same gait, and became the default (`planner/NLP.md`, "Fifth round").
+//! Its restoration phase is younger than ripopt's: the planner re-solves a stage whose native
+//! restoration fails with ripopt.
 
 mod ipm;
 mod kkt;

@@ -177,11 +177,13 @@ pub enum IterationControl {
 #[non_exhaustive]
 pub enum Backend {
     /// `ripopt` 0.8: a pure-Rust IPOPT-class primal–dual interior point
-    /// method (filter line search, sparse LDLᵀ with inertia correction). EPL-2.0.
-    #[default]
+    /// method (filter line search, sparse LDLᵀ with inertia correction). EPL-2.0. The
+    /// cross-check, and the planner's fallback where the native restoration phase fails.
     Ripopt,
     /// Our own primal–dual interior point ([`super::NativeSolver`]): IPOPT's filter line search
-    /// and restoration phase on a condensed KKT system factorized by feral's LDLᵀ.
+    /// and restoration phase on a condensed KKT system factorized by faer's LDLᵀ on a paired
+    /// ordering. The default: on the ADAM plan ~1.4× faster than ripopt, the same optima.
+    #[default]
     Native,
 }
 
