@@ -114,7 +114,7 @@
 //! warm starts made ripopt the first default. The native backend was then written for speed
 //! (issue #3: it owns its KKT system, so a faster factorization can be put under it) and
 //! as an independent cross-check. With feral's factorization it matched ripopt's iterations
-//! and was no faster; with faer's LDLᵀ on a paired ordering (`kkt`) it plans ADAM 1.4× faster
+//! and was no faster; with faer's LDLᵀ on a paired ordering (`kkt`) it plans ADAM 1.2–1.5× faster
 //! than ripopt to the same gait, and became the default (`planner/NLP.md`, "Fifth round").
 //! Its restoration phase is younger than ripopt's: the planner re-solves a stage whose native
 //! restoration fails with ripopt.

@@ -182,7 +182,7 @@ pub enum Backend {
     Ripopt,
     /// Our own primal–dual interior point ([`super::NativeSolver`]): IPOPT's filter line search
     /// and restoration phase on a condensed KKT system factorized by faer's LDLᵀ on a paired
-    /// ordering. The default: on the ADAM plan ~1.4× faster than ripopt, the same optima.
+    /// ordering. The default: on the ADAM plan 1.2–1.5× faster than ripopt, the same optima.
     #[default]
     Native,
 }
