@@ -82,6 +82,9 @@ pub(crate) struct KktSystem {
     jac_vars: Vec<usize>,
     /// faer's factorization, set up at the first factorization (the ordering needs values).
     faer: Option<FaerLdlt>,
+    /// Whether that set-up was tried (a failed one is not repeated: every factorization then
+    /// goes to feral).
+    faer_tried: bool,
     /// feral's symbolic analysis, set up at the first fallback.
     symbolic: Option<SymbolicFactorization>,
     workspace: FactorWorkspace,
@@ -157,6 +160,7 @@ impl KktSystem {
             hess_vars: hess.0.iter().copied().zip(hess.1.iter().copied()).collect(),
             jac_vars: jac.1.to_vec(),
             faer: None,
+            faer_tried: false,
             symbolic: None,
             workspace: FactorWorkspace::new(),
             params,
@@ -207,7 +211,8 @@ impl KktSystem {
 
     fn factorize_inner(&mut self) -> Option<Inertia> {
         self.factors = None;
-        if self.faer.is_none() {
+        if !self.faer_tried {
+            self.faer_tried = true;
             self.faer = FaerLdlt::new(&self.matrix);
         }
         if let Some(inertia) = self.faer.as_mut().and_then(|f| f.factorize(&self.matrix)) {
