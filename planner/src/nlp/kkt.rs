@@ -148,8 +148,8 @@ impl KktSystem {
         // correction loop then regularizes and refactorizes.
         params.bk.on_zero_pivot = ZeroPivotAction::ForceAccept;
         params.scaling = ScalingStrategy::Identity;
-        params.bk.zero_tol = 1e-10;
-        params.bk.zero_tol_2x2 = 1e-20;
+        params.bk.zero_tol = ZERO_PIVOT;
+        params.bk.zero_tol_2x2 = ZERO_PIVOT * ZERO_PIVOT;
         Ok(Self {
             n,
             m,
@@ -318,7 +318,8 @@ struct FaerLdlt {
     factored: bool,
 }
 
-/// Magnitude below which a 1×1 pivot counts as zero (feral's `zero_tol` as the KKT set it).
+/// Magnitude below which a 1×1 pivot counts as zero (its square for a 2×2 block's determinant),
+/// the same for faer's inertia count and feral's `zero_tol`.
 const ZERO_PIVOT: f64 = 1e-10;
 
 impl FaerLdlt {
