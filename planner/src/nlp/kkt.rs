@@ -21,9 +21,18 @@
 //!
 //! The inertia is counted from D's 1×1 and 2×2 blocks; a pivot below 1e-10 in magnitude (a
 //! 2×2 block with |det| ≤ 1e-20) counts as zero, as feral's `zero_tol` did. Where faer's factor
-//! is not finite, that factorization falls back to feral's multifrontal LDLᵀ, which delays
-//! pivots across supernodes (counted in [`KktStats::fallbacks`]). Both run sequentially, so the
-//! same matrix gives the same factor bit for bit.
+//! is not finite (a zero pivot that pivoting inside the supernode cannot avoid), the
+//! factorization fails ([`KktStats::nonfinite`]) and the interior point raises δ_w, as IPOPT
+//! does when its linear solver reports a singular matrix. Until December 2026 such a matrix went
+//! to feral instead: on ADAM the first 14 matrices of the feasibility solve (δ_w = 0) did, at
+//! ~10 ms each; the feasibility solve took 0.73 s, now 0.56–0.63 s (49 iterations for 43). feral's
+//! multifrontal LDLᵀ, which delays pivots across supernodes, remains for a pattern whose faer
+//! set-up fails (every factorization then goes to it, counted in [`KktStats::fallbacks`]). Both
+//! run sequentially, so the same matrix gives the same factor bit for bit.
+//!
+//! [`KktSystem::twin`] gives a second system with the same pattern and the same ordering, so
+//! that the interior point can factorize two δ_w trials at once (one per core) and get the
+//! factors it would have got one after the other.
 
 use dyn_stack::{GlobalPodBuffer, PodStack};
 use faer::perm::PermRef;
@@ -61,8 +70,10 @@ pub(crate) struct KktStats {
     pub factorization_time: std::time::Duration,
     pub solves: usize,
     pub solve_time: std::time::Duration,
-    /// Factorizations that fell back from faer to feral.
+    /// Factorizations that went to feral (faer's set-up failed for this pattern).
     pub fallbacks: usize,
+    /// faer factors that were not finite: failed factorizations.
+    pub nonfinite: usize,
 }
 
 /// The KKT matrix of one solve: fixed pattern, fresh values per factorization.
@@ -215,11 +226,56 @@ impl KktSystem {
             self.faer_tried = true;
             self.faer = FaerLdlt::new(&self.matrix);
         }
-        if let Some(inertia) = self.faer.as_mut().and_then(|f| f.factorize(&self.matrix)) {
-            return Some(inertia);
+        match self.faer.as_mut() {
+            Some(faer) => {
+                let inertia = faer.factorize(&self.matrix);
+                if inertia.is_none() {
+                    self.stats.nonfinite += 1;
+                }
+                inertia
+            }
+            None => {
+                self.stats.fallbacks += 1;
+                self.factorize_feral()
+            }
         }
-        self.stats.fallbacks += 1;
-        self.factorize_feral()
+    }
+
+    /// Whether the first factorization has set up the ordering (faer's, or feral's fallback).
+    pub fn is_set_up(&self) -> bool {
+        self.faer_tried
+    }
+
+    /// A second system with this one's pattern and, once this one's faer set-up is done, the
+    /// same ordering and symbolic analysis: the same matrix then gives both the same factor,
+    /// bit for bit. Its statistics start at zero.
+    pub fn twin(&self) -> Self {
+        let faer = self
+            .faer
+            .as_ref()
+            .and_then(|f| FaerLdlt::with_ordering(&self.matrix, f.perm.clone()));
+        Self {
+            n: self.n,
+            m: self.m,
+            matrix: CscMatrix {
+                n: self.matrix.n,
+                col_ptr: self.matrix.col_ptr.clone(),
+                row_idx: self.matrix.row_idx.clone(),
+                values: vec![0.0; self.matrix.values.len()],
+            },
+            hess_slots: self.hess_slots.clone(),
+            jac_slots: self.jac_slots.clone(),
+            diag_slots: self.diag_slots.clone(),
+            hess_vars: self.hess_vars.clone(),
+            jac_vars: self.jac_vars.clone(),
+            faer_tried: self.faer_tried,
+            faer,
+            symbolic: None,
+            workspace: FactorWorkspace::new(),
+            params: self.params.clone(),
+            factors: None,
+            stats: KktStats::default(),
+        }
     }
 
     /// feral's multifrontal LDLᵀ with delayed pivots: its sequential driver, whose sums run in
@@ -306,6 +362,8 @@ impl KktSystem {
 /// faer's supernodal intranode Bunch–Kaufman LDLᵀ on feral's matching-compressed METIS
 /// ordering (module docs), with its buffers.
 struct FaerLdlt {
+    /// The fill-reducing ordering (new position k holds old index `perm[k]`).
+    perm: Vec<usize>,
     symbolic: SymbolicCholesky<usize>,
     l_values: Vec<f64>,
     subdiag: Vec<f64>,
@@ -326,7 +384,6 @@ impl FaerLdlt {
     /// The ordering and symbolic analysis for `matrix`'s pattern, the matching from its values;
     /// `None` if either fails (the caller then uses feral).
     fn new(matrix: &CscMatrix) -> Option<Self> {
-        let n = matrix.n;
         let params = SupernodeParams {
             preprocess: OrderingPreprocess::LdltCompress,
             ..SupernodeParams::default()
@@ -334,6 +391,12 @@ impl FaerLdlt {
         let perm = symbolic_factorize_with_method(matrix, &params, OrderingMethod::MetisND)
             .ok()?
             .perm;
+        Self::with_ordering(matrix, perm)
+    }
+
+    /// The symbolic analysis of `matrix`'s pattern for the ordering `perm`; `None` if it fails.
+    fn with_ordering(matrix: &CscMatrix, perm: Vec<usize>) -> Option<Self> {
+        let n = matrix.n;
         let mut perm_inv = vec![0; n];
         for (k, &old) in perm.iter().enumerate() {
             perm_inv[old] = k;
@@ -357,6 +420,7 @@ impl FaerLdlt {
         let solve_mem =
             GlobalPodBuffer::try_new(symbolic.solve_in_place_req::<f64>(1).ok()?).ok()?;
         Some(Self {
+            perm,
             l_values: vec![0.0; symbolic.len_values()],
             subdiag: vec![0.0; n],
             pivots_fwd: vec![0; n],
@@ -584,5 +648,85 @@ mod tests {
                 residual.amax()
             );
         }
+    }
+
+    /// A KKT matrix whose linear variables have no curvature and whose (2,2) block is exactly
+    /// zero (δ_w = δ_c = 0): faer's pivoting inside supernodes meets a zero pivot and its factor
+    /// is not finite. That is a failed factorization (the interior point then raises δ_w), not a
+    /// detour through feral; with δ_w = 1 and δ_c = 1e-8 the same pattern factorizes, with the
+    /// inertia of a dense eigendecomposition.
+    #[test]
+    fn a_factor_faer_cannot_finish_fails_and_a_perturbed_one_succeeds() {
+        let (n, m) = (45_usize, 27_usize);
+        let mut seed = 2_u64;
+        let mut next = move || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let (mut hr, mut hc, mut hv) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..n {
+            for j in i.saturating_sub(2)..=i {
+                hr.push(i);
+                hc.push(j);
+                hv.push(if i % 3 == 2 {
+                    0.0 // a linear variable: no curvature
+                } else if i == j {
+                    3.0 * next()
+                } else {
+                    next()
+                });
+            }
+        }
+        let (mut jr, mut jc, mut jv) = (Vec::new(), Vec::new(), Vec::new());
+        for r in 0..m {
+            let first = (r * n) / m;
+            for c in first..(first + 3).min(n) {
+                jr.push(r);
+                jc.push(c);
+                jv.push(next());
+            }
+        }
+        let masked = vec![false; n];
+        let mut k = KktSystem::new(n, m, (&hr, &hc), (&jr, &jc)).unwrap();
+        // The ordering comes from the first matrix, as in a solve: the least-squares one.
+        k.assemble(
+            &vec![0.0; hv.len()],
+            &jv,
+            &vec![1.0; n],
+            &vec![-1.0; m],
+            &masked,
+        );
+        assert!(k.factorize().is_some());
+        k.assemble(&hv, &jv, &vec![0.0; n], &vec![0.0; m], &masked);
+        assert_eq!(k.factorize(), None);
+        assert_eq!((k.stats.nonfinite, k.stats.fallbacks), (1, 0));
+        let (delta_w, delta_c) = (1.0, 1e-8);
+        k.assemble(&hv, &jv, &vec![delta_w; n], &vec![-delta_c; m], &masked);
+        let inertia = k.factorize().unwrap();
+        let mut dense = nalgebra::DMatrix::<f64>::zeros(n + m, n + m);
+        for ((&r, &c), &v) in hr.iter().zip(&hc).zip(&hv) {
+            dense[(r, c)] += v;
+            if r != c {
+                dense[(c, r)] += v;
+            }
+        }
+        for ((&r, &c), &v) in jr.iter().zip(&jc).zip(&jv) {
+            dense[(n + r, c)] += v;
+            dense[(c, n + r)] += v;
+        }
+        for i in 0..n {
+            dense[(i, i)] += delta_w;
+        }
+        for i in 0..m {
+            dense[(n + i, n + i)] -= delta_c;
+        }
+        let eigen = nalgebra::SymmetricEigen::new(dense).eigenvalues;
+        assert!(eigen.iter().all(|e| e.abs() > 1e-12), "{eigen}");
+        let positive = eigen.iter().filter(|&&e| e > 0.0).count();
+        assert_eq!(
+            (inertia.positive, inertia.negative, inertia.zero),
+            (positive, n + m - positive, 0)
+        );
+        assert_eq!((k.stats.nonfinite, k.stats.fallbacks), (1, 0));
     }
 }

@@ -42,7 +42,8 @@
 //!   faer's supernodal LDLᵀ on a matching-paired ordering from feral (`kkt`). It reaches 51 of
 //!   57 Hock–Schittkowski optima (ripopt 50) and plans ADAM in 43 + 78 iterations to the same
 //!   gait, `adam bench plan` median 1.61 s against ripopt's ~2.3 s (`planner/NLP.md`, fifth
-//!   round). The default since then; ripopt stays as the cross-check and as the fallback
+//!   round); since the sixth round (a factor faer cannot finish is a failed inertia trial, two
+//!   trials factorized at once) 49 + 74 iterations and 1.41–1.50 s. The default since then; ripopt stays as the cross-check and as the fallback
 //!   where the native restoration phase fails.
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
