@@ -252,6 +252,10 @@ struct Ipm<'a> {
     tau: f64,
     delta_w_last: f64,
     kkt: Option<KktSystem>,
+    /// Whether two δ_w trials are factorized at once (`factorize`): decided at construction,
+    /// true with a core to spare, i.e. outside the rayon pool (a co-design sweep's workers keep
+    /// every core busy with whole runs) and with more than one thread in it.
+    pair_trials: bool,
     /// A second KKT system with `kkt`'s ordering, for two δ_w trials at once.
     twin: Option<KktSystem>,
     /// Pairs of δ_w trials factorized at once, and how many of them the twin's trial decided.
@@ -306,6 +310,8 @@ impl<'a> Ipm<'a> {
             tau: TAU_MIN,
             delta_w_last: 0.0,
             kkt: None,
+            pair_trials: rayon::current_thread_index().is_none()
+                && rayon::current_num_threads() > 1,
             twin: None,
             paired_trials: 0,
             twin_accepted: 0,
@@ -736,56 +742,55 @@ impl<'a> Ipm<'a> {
         } else {
             0.0
         };
-        // With a core to spare (not inside a co-design sweep's workers, which keep every core
-        // busy), the trial δ_w and the one that would follow its failure are factorized at once
-        // on twin systems with the same ordering: the same factors and the same choice as one
-        // after the other, in the time of one when the first fails (~40 % of ADAM's iterations).
-        let parallel = rayon::current_thread_index().is_none() && rayon::current_num_threads() > 1;
+        // Pairing (`pair_trials`): the trial δ_w and the one that would follow its failure are
+        // factorized at once on twin systems with the same ordering: the same factors and the
+        // same choice as one after the other, in the time of one when the first fails (~40 % of
+        // ADAM's iterations).
+        let (hess, jac, fixed) = (&self.hess, &self.jac, &self.fixed);
+        let trial = |k: &mut KktSystem, (primal, dual): (Vec<f64>, Vec<f64>)| {
+            k.assemble(hess, jac, &primal, &dual, fixed);
+            k.factorize()
+        };
         let mut trials = 0;
         while trials < MAX_CORRECTIONS {
             let next = self.next_delta_w(delta_w);
-            let set_up = self.kkt.as_ref().is_some_and(|k| k.is_set_up());
-            if parallel && set_up && next <= DELTA_W_MAX && trials + 2 <= MAX_CORRECTIONS {
-                if self.twin.is_none() {
-                    self.twin = self.kkt.as_ref().map(|k| k.twin());
+            let kkt = self.kkt.as_mut()?;
+            if self.pair_trials && self.twin.is_none() && kkt.is_set_up() {
+                self.twin = kkt.twin();
+                // A twin without this system's ordering would not give its factors.
+                self.pair_trials = self.twin.is_some();
+            }
+            let pair = self.pair_trials
+                && self.twin.is_some()
+                && next <= DELTA_W_MAX
+                && trials + 2 <= MAX_CORRECTIONS;
+            let diagonals = self.diagonals(sx, ss, delta_w, delta_c);
+            let next_diagonals = pair.then(|| self.diagonals(sx, ss, next, delta_c));
+            let kkt = self.kkt.as_mut()?;
+            match (self.twin.as_mut(), next_diagonals) {
+                (Some(twin), Some(next_diagonals)) => {
+                    let (ra, rb) =
+                        rayon::join(|| trial(kkt, diagonals), || trial(twin, next_diagonals));
+                    trials += 2;
+                    self.paired_trials += 1;
+                    if correct(ra) {
+                        return Some(self.accept_delta_w(delta_w));
+                    }
+                    if correct(rb) {
+                        // The solves use `kkt`: it takes the twin's factor.
+                        std::mem::swap(&mut self.kkt, &mut self.twin);
+                        self.twin_accepted += 1;
+                        return Some(self.accept_delta_w(next));
+                    }
+                    delta_w = self.next_delta_w(next);
                 }
-                let (pa, da) = self.diagonals(sx, ss, delta_w, delta_c);
-                let (pb, db) = self.diagonals(sx, ss, next, delta_c);
-                let (hess, jac, fixed) = (&self.hess, &self.jac, &self.fixed);
-                let (Some(a), Some(b)) = (self.kkt.as_mut(), self.twin.as_mut()) else {
-                    return None;
-                };
-                let (ra, rb) = rayon::join(
-                    || {
-                        a.assemble(hess, jac, &pa, &da, fixed);
-                        a.factorize()
-                    },
-                    || {
-                        b.assemble(hess, jac, &pb, &db, fixed);
-                        b.factorize()
-                    },
-                );
-                trials += 2;
-                self.paired_trials += 1;
-                if correct(ra) {
-                    return Some(self.accept_delta_w(delta_w));
+                _ => {
+                    trials += 1;
+                    if correct(trial(kkt, diagonals)) {
+                        return Some(self.accept_delta_w(delta_w));
+                    }
+                    delta_w = next;
                 }
-                if correct(rb) {
-                    // The solves use `kkt`: it takes the twin's factor.
-                    std::mem::swap(&mut self.kkt, &mut self.twin);
-                    self.twin_accepted += 1;
-                    return Some(self.accept_delta_w(next));
-                }
-                delta_w = self.next_delta_w(next);
-            } else {
-                let (primal, dual) = self.diagonals(sx, ss, delta_w, delta_c);
-                let kkt = self.kkt.as_mut()?;
-                kkt.assemble(&self.hess, &self.jac, &primal, &dual, &self.fixed);
-                trials += 1;
-                if correct(kkt.factorize()) {
-                    return Some(self.accept_delta_w(delta_w));
-                }
-                delta_w = next;
             }
             if delta_w > DELTA_W_MAX {
                 return None;
@@ -1516,12 +1521,7 @@ impl<'a> Ipm<'a> {
             if let Some(k) = &self.kkt {
                 let mut st = k.stats;
                 if let Some(t) = &self.twin {
-                    st.factorizations += t.stats.factorizations;
-                    st.factorization_time += t.stats.factorization_time;
-                    st.fallbacks += t.stats.fallbacks;
-                    st.nonfinite += t.stats.nonfinite;
-                    st.solves += t.stats.solves;
-                    st.solve_time += t.stats.solve_time;
+                    st += t.stats;
                 }
                 eprintln!(
                     "kkt: {} factorizations {:?} ({} not finite, {} by feral; {} pairs at once, {} decided by the second), {} solves {:?}; total {:?}, eval {:?}",
@@ -1749,11 +1749,15 @@ mod tests {
         }
     }
 
-    /// Runs the interior point on `problem` and returns its solution with the number of paired
-    /// trials and of pairs the twin decided.
-    fn run_counting(problem: &dyn super::NlpProblem) -> (super::Solution, usize, usize) {
+    /// Runs the interior point on `problem`, with δ_w trials in pairs if `pair`, and returns its
+    /// solution with the number of paired trials and of pairs the twin decided.
+    fn run_counting(
+        problem: &dyn super::NlpProblem,
+        pair: bool,
+    ) -> (super::Solution, usize, usize) {
         let options = native();
         let mut ipm = super::Ipm::new(problem, &options);
+        ipm.pair_trials = pair;
         let start = std::time::Instant::now();
         let status = ipm.iterate(&mut |_| IterationControl::Continue, start);
         let (pairs, twin) = (ipm.paired_trials, ipm.twin_accepted);
@@ -1763,14 +1767,8 @@ mod tests {
     #[test]
     fn two_inertia_trials_at_once_give_the_sequential_iterates_bit_for_bit() {
         let problem = DenseAdProblem::new(Concave);
-        // Outside the rayon pool: trials in pairs, on both cores.
-        let (paired, pairs, twin) = run_counting(&problem);
-        // On a pool thread: one trial after the other.
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        let (sequential, seq_pairs, _) = pool.install(|| run_counting(&problem));
+        let (paired, pairs, twin) = run_counting(&problem, true);
+        let (sequential, seq_pairs, _) = run_counting(&problem, false);
         println!(
             "concave: {} iterations, {pairs} pairs, {twin} decided by the second trial",
             paired.statistics.iterations
@@ -1798,6 +1796,19 @@ mod tests {
             "{:?}",
             paired.x
         );
+    }
+
+    #[test]
+    fn trials_are_paired_outside_the_rayon_pool_only() {
+        let problem = DenseAdProblem::new(Concave);
+        let options = native();
+        let outside = super::Ipm::new(&problem, &options).pair_trials;
+        assert_eq!(outside, rayon::current_num_threads() > 1);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        assert!(!pool.install(|| super::Ipm::new(&problem, &options).pair_trials));
     }
 
     /// min x subject to x² ≤ −1: no feasible point.

@@ -76,6 +76,18 @@ pub(crate) struct KktStats {
     pub nonfinite: usize,
 }
 
+impl std::ops::AddAssign for KktStats {
+    /// Adds the work of another system (a twin's) to this one's.
+    fn add_assign(&mut self, other: Self) {
+        self.factorizations += other.factorizations;
+        self.factorization_time += other.factorization_time;
+        self.solves += other.solves;
+        self.solve_time += other.solve_time;
+        self.fallbacks += other.fallbacks;
+        self.nonfinite += other.nonfinite;
+    }
+}
+
 /// The KKT matrix of one solve: fixed pattern, fresh values per factorization.
 pub(crate) struct KktSystem {
     n: usize,
@@ -248,13 +260,14 @@ impl KktSystem {
 
     /// A second system with this one's pattern and, once this one's faer set-up is done, the
     /// same ordering and symbolic analysis: the same matrix then gives both the same factor,
-    /// bit for bit. Its statistics start at zero.
-    pub fn twin(&self) -> Self {
-        let faer = self
-            .faer
-            .as_ref()
-            .and_then(|f| FaerLdlt::with_ordering(&self.matrix, f.perm.clone()));
-        Self {
+    /// bit for bit. Its statistics start at zero. `None` if that analysis fails (the twin would
+    /// not give this system's factors).
+    pub fn twin(&self) -> Option<Self> {
+        let faer = match &self.faer {
+            Some(f) => Some(FaerLdlt::with_ordering(&self.matrix, f.perm.clone())?),
+            None => None,
+        };
+        Some(Self {
             n: self.n,
             m: self.m,
             matrix: CscMatrix {
@@ -275,7 +288,7 @@ impl KktSystem {
             params: self.params.clone(),
             factors: None,
             stats: KktStats::default(),
-        }
+        })
     }
 
     /// feral's multifrontal LDLᵀ with delayed pivots: its sequential driver, whose sums run in

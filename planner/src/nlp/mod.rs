@@ -29,11 +29,12 @@
 //! constraints for ADAM): it needs a primal–dual interior point with a filter line search, an
 //! inertia-corrected sparse LDLᵀ and a restoration phase — what IPOPT does. The candidates, all
 //! pure Rust from crates.io (`shared/CRATES.md`):
-//! - **ripopt 0.8** (chosen first, the default until the fifth round): an IPOPT-class method with sparse LDLᵀ and inertia detection. It
-//!   reproduced IPOPT's iteration counts on a pendulum swing-up (152–4502 variables) and here
-//!   solves 50 of 57 Hock–Schittkowski problems to their published optima (the 7 others listed
-//!   with reasons in `tests/hock_schittkowski.rs`: IPOPT stops at the same points on HS2, HS13,
-//!   HS20 and HS44; HS116 ends below the published value),
+//! - **ripopt 0.8** (chosen first, the default until the fifth round): an IPOPT-class method
+//!   with sparse LDLᵀ and inertia detection. It reproduced IPOPT's iteration counts on a
+//!   pendulum swing-up (152–4502 variables) and here solves 50 of 57 Hock–Schittkowski
+//!   problems to their published optima (the 7 others listed with reasons in
+//!   `tests/hock_schittkowski.rs`: IPOPT stops at the same points on HS2, HS13, HS20 and HS44;
+//!   HS116 ends below the published value),
 //!   and the ADAM gait in 43 + 77 iterations (CasADi + IPOPT + MUMPS: 14 + 64 on a comparable
 //!   five-link problem, `shared/PLANNER-NOTES.md`).
 //! - **our own interior point** ([`NativeSolver`], [`Backend::Native`], built December 2026):
@@ -43,8 +44,9 @@
 //!   57 Hock–Schittkowski optima (ripopt 50) and plans ADAM in 43 + 78 iterations to the same
 //!   gait, `adam bench plan` median 1.61 s against ripopt's ~2.3 s (`planner/NLP.md`, fifth
 //!   round); since the sixth round (a factor faer cannot finish is a failed inertia trial, two
-//!   trials factorized at once) 49 + 74 iterations and 1.41–1.50 s. The default since then; ripopt stays as the cross-check and as the fallback
-//!   where the native restoration phase fails.
+//!   trials factorized at once) 49 + 74 iterations and 1.41–1.50 s. The default since the
+//!   fifth round; ripopt stays as the cross-check and as the fallback where the native
+//!   restoration phase fails.
 //! - **clarabel inside an SQP**: clarabel solves convex QPs/cones fast on banded structure, but
 //!   an SQP on an indefinite Lagrangian Hessian needs convexification, a merit function or
 //!   filter, and its own feasibility restoration; not attempted.
