@@ -11,7 +11,7 @@
 //! in the world; the impact with the ground is rigid and plastic (the paper's reset map Δ, with the
 //! left/right relabeling in [`PlanarModel::reset_map`]).
 
-use crate::kinematics::{rot_sin_cos, BodyStates};
+use crate::kinematics::{rot_sin_cos, BodyStates, Coefficient};
 use crate::linalg::{solve_in_place, solve_many_in_place};
 use crate::robot::{BodyInertia, PlanarModel, Side, MAX_DOF};
 use crate::{ModelError, Real, Result};
@@ -262,9 +262,13 @@ impl PlanarModel {
     /// and bias accelerations, so it is the same (up to rounding) for states computed with any
     /// base position and base linear velocity: a caller that needs the base shifted (a pinned
     /// stance foot at the origin) may pass states computed before the shift.
-    pub fn inverse_dynamics_in<S: Real>(
+    ///
+    /// The mass properties are scalars of the states' type, or [`Constant`](crate::kinematics::Constant)s when they do not
+    /// depend on the variables being differentiated (a fixed design): the same values with
+    /// fewer dual-number operations.
+    pub fn inverse_dynamics_in<S: Real, I: Coefficient<S>>(
         &self,
-        inertias: &[BodyInertia<S>],
+        inertias: &[BodyInertia<I>],
         st: &BodyStates<S>,
         ddq: &[S],
         out: &mut [S],
@@ -298,7 +302,7 @@ impl PlanarModel {
         // matters when S is a wide dual number.
         let mut cols = [(0usize, z, z); crate::robot::MAX_DOF];
         for (b, inertia) in inertias.iter().enumerate() {
-            if inertia.mass_kg.re() == 0.0 && inertia.inertia_yy_kgm2.re() == 0.0 {
+            if inertia.mass_kg.value() == 0.0 && inertia.inertia_yy_kgm2.value() == 0.0 {
                 continue;
             }
             let com = self.point_position(st, b, inertia.com_xz_m);
@@ -322,11 +326,14 @@ impl PlanarModel {
                 a[0] += jx * ddq[c];
                 a[1] += jz * ddq[c];
             }
-            let f = [inertia.mass_kg * a[0], inertia.mass_kg * (a[1] + g)];
+            let f = [
+                inertia.mass_kg.times_left(a[0]),
+                inertia.mass_kg.times_left(a[1] + g),
+            ];
             for &(c, jx, jz) in &cols[..nc] {
                 out[c] += jx * f[0] + jz * f[1];
             }
-            let torque = inertia.inertia_yy_kgm2 * alpha[b];
+            let torque = inertia.inertia_yy_kgm2.times_left(alpha[b]);
             out[2] += torque;
             for &j in &self.bodies[b].joint_path {
                 if let crate::robot::JointKind::Revolute { axis_sign } = self.joints[j].kind {

@@ -25,10 +25,67 @@ pub fn rot<S: Real>(pitch: S, v: [S; 2]) -> [S; 2] {
     rot_sin_cos(pitch.sin_cos(), v)
 }
 
-/// [`rot`] with `(sin θ, cos θ)` given.
+/// [`rot`] with `(sin θ, cos θ)` given, for a vector of scalars or of [`Constant`]s.
 #[inline]
-pub(crate) fn rot_sin_cos<S: Real>((s, c): (S, S), v: [S; 2]) -> [S; 2] {
-    [c * v[0] + s * v[1], c * v[1] - s * v[0]]
+pub(crate) fn rot_sin_cos<S: Real, V: Coefficient<S>>((s, c): (S, S), v: [V; 2]) -> [S; 2] {
+    [v[0].times(c) + v[1].times(s), v[1].times(c) - v[0].times(s)]
+}
+
+/// A factor of a product with a scalar `S`: `S` itself, or a [`Constant`].
+///
+/// With a dual-number `S`, a product by a constant lifted to `S` applies the full product rule
+/// to a factor whose derivative parts are zero. A [`Constant`] scales the parts instead: the
+/// same value (the dropped terms are exact zeros; only the sign of a zero can differ), at a
+/// fraction of the operations. Body offsets, joint axes and (for a fixed design) mass
+/// properties are such constants in the planner's derivative sweeps.
+pub trait Coefficient<S>: Copy {
+    /// `s * self`.
+    fn times(self, s: S) -> S;
+    /// `self * s` (the same value; for `S` itself, the same operations in the same order as
+    /// the product written that way).
+    fn times_left(self, s: S) -> S;
+    /// The real part.
+    fn value(self) -> f64;
+}
+
+/// An `f64` that multiplies a scalar part by part (see [`Coefficient`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Constant(pub f64);
+
+impl<S: Real> Coefficient<S> for S {
+    #[inline]
+    fn times(self, s: S) -> S {
+        s * self
+    }
+    #[inline]
+    fn times_left(self, s: S) -> S {
+        self * s
+    }
+    #[inline]
+    fn value(self) -> f64 {
+        self.re()
+    }
+}
+
+impl<S: Real> Coefficient<S> for Constant {
+    #[inline]
+    fn times(self, s: S) -> S {
+        s * self.0
+    }
+    #[inline]
+    fn times_left(self, s: S) -> S {
+        s * self.0
+    }
+    #[inline]
+    fn value(self) -> f64 {
+        self.0
+    }
+}
+
+/// `v` as [`Constant`]s.
+#[inline]
+pub fn constants(v: [f64; 2]) -> [Constant; 2] {
+    [Constant(v[0]), Constant(v[1])]
 }
 
 /// `ω̂ × r` for a unit angular velocity about +y.
@@ -48,10 +105,6 @@ fn sub<S: Real>(a: [S; 2], b: [S; 2]) -> [S; 2] {
 #[inline]
 fn scale<S: Real>(k: S, a: [S; 2]) -> [S; 2] {
     [k * a[0], k * a[1]]
-}
-#[inline]
-fn c2<S: Real>(v: [f64; 2]) -> [S; 2] {
-    [S::from(v[0]), S::from(v[1])]
 }
 
 /// Fixed-capacity, allocation-free per-body state: poses, and optionally velocities.
@@ -132,7 +185,7 @@ impl PlanarModel {
     /// calls it every 0.1 ms step).
     pub fn body_poses_into<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) -> Result<()> {
         self.check_len("q", q.len())?;
-        self.reset_states(q, st);
+        self.reset_states(q, st, true);
         for (b, body) in self.bodies.iter().enumerate().skip(1) {
             let (Some(p), Some(j)) = (body.parent, body.joint) else {
                 continue;
@@ -144,12 +197,19 @@ impl PlanarModel {
         Ok(())
     }
 
-    /// Zeroes `st` for this model's bodies and sets the base pose from q.
-    fn reset_states<S: Real>(&self, q: &[S], st: &mut BodyStates<S>) {
+    /// Zeroes `st` for this model's bodies and sets the base pose from q. With `all` false,
+    /// only the bodies that a states pass does not write (the base and any body without a
+    /// parent joint): [`Self::body_states_into`] overwrites every field of the others, so
+    /// zeroing them first would be wasted work (kilobytes per pass for a wide dual number).
+    fn reset_states<S: Real>(&self, q: &[S], st: &mut BodyStates<S>, all: bool) {
         let z = S::zero();
         let n = self.bodies.len().min(MAX_BODIES);
         st.len = self.bodies.len();
         for b in 0..n {
+            let body = &self.bodies[b];
+            if !all && b > 0 && body.parent.is_some() && body.joint.is_some() {
+                continue;
+            }
             st.pose[b] = Pose {
                 xz_m: [z, z],
                 pitch_rad: z,
@@ -183,7 +243,7 @@ impl PlanarModel {
         let joint = &self.joints[j];
         let qj = q[joint.coordinate];
         let phi = parent.pitch_rad + S::from(body.origin_pitch_rad);
-        let mut offset = rot_sin_cos(sin_cos[p], c2(body.origin_xz_m));
+        let mut offset = rot_sin_cos(sin_cos[p], constants(body.origin_xz_m));
         let (pitch, motion) = match joint.kind {
             JointKind::Revolute { axis_sign } => {
                 let pitch = phi + qj * axis_sign;
@@ -196,7 +256,7 @@ impl PlanarModel {
                 } else {
                     phi.sin_cos()
                 };
-                let a = rot_sin_cos(sin_cos[b], c2(axis_xz));
+                let a = rot_sin_cos(sin_cos[b], constants(axis_xz));
                 offset = add(offset, scale(qj, a));
                 (phi, ChildMotion::Prismatic { axis: a })
             }
@@ -229,7 +289,7 @@ impl PlanarModel {
         self.check_len("q", q.len())?;
         self.check_len("dq", dq.len())?;
         let z = S::zero();
-        self.reset_states(q, st);
+        self.reset_states(q, st, false);
         st.vel_xz[0] = [dq[0], dq[1]];
         st.omega[0] = dq[2];
         for (b, body) in self.bodies.iter().enumerate().skip(1) {
@@ -256,32 +316,32 @@ impl PlanarModel {
     }
 
     /// World position of a point given in the frame of `body`.
-    pub fn point_position<S: Real>(
+    pub fn point_position<S: Real, V: Coefficient<S>>(
         &self,
         st: &BodyStates<S>,
         body: usize,
-        local_xz: [S; 2],
+        local_xz: [V; 2],
     ) -> [S; 2] {
         add(st.pose[body].xz_m, rot_sin_cos(st.sin_cos[body], local_xz))
     }
 
     /// World velocity of a point given in the frame of `body` (needs `body_states` with q̇).
-    pub fn point_velocity<S: Real>(
+    pub fn point_velocity<S: Real, V: Coefficient<S>>(
         &self,
         st: &BodyStates<S>,
         body: usize,
-        local_xz: [S; 2],
+        local_xz: [V; 2],
     ) -> [S; 2] {
         let r = rot_sin_cos(st.sin_cos[body], local_xz);
         add(st.vel_xz[body], scale(st.omega[body], perp(r)))
     }
 
     /// Bias acceleration J̇ q̇ of a point given in the frame of `body`.
-    pub fn point_bias_acceleration<S: Real>(
+    pub fn point_bias_acceleration<S: Real, V: Coefficient<S>>(
         &self,
         st: &BodyStates<S>,
         body: usize,
-        local_xz: [S; 2],
+        local_xz: [V; 2],
     ) -> [S; 2] {
         let r = rot_sin_cos(st.sin_cos[body], local_xz);
         let w = st.omega[body];
@@ -331,9 +391,10 @@ impl PlanarModel {
             let c = joint.body;
             let col = match joint.kind {
                 JointKind::Revolute { axis_sign } => {
-                    scale(S::from(axis_sign), perp(sub(p, st.pose[c].xz_m)))
+                    let r = perp(sub(p, st.pose[c].xz_m));
+                    [r[0] * axis_sign, r[1] * axis_sign]
                 }
-                JointKind::Prismatic { axis_xz } => rot_sin_cos(sin_cos(c), c2(axis_xz)),
+                JointKind::Prismatic { axis_xz } => rot_sin_cos(sin_cos(c), constants(axis_xz)),
             };
             set(0, joint.coordinate, col[0]);
             set(1, joint.coordinate, col[1]);
@@ -365,19 +426,19 @@ impl PlanarModel {
             // At its body's origin (a point foot): nothing to rotate.
             return st.pose[f.body].xz_m;
         }
-        self.point_position(st, f.body, c2(f.offset_xz_m))
+        self.point_position(st, f.body, constants(f.offset_xz_m))
     }
 
     /// World velocity of frame `frame` from computed body states.
     pub fn frame_velocity_in<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> [S; 2] {
         let f = &self.frames[frame];
-        self.point_velocity(st, f.body, c2(f.offset_xz_m))
+        self.point_velocity(st, f.body, constants(f.offset_xz_m))
     }
 
     /// Bias acceleration J̇q̇ of frame `frame` from computed body states.
     pub fn frame_bias_acceleration_in<S: Real>(&self, st: &BodyStates<S>, frame: usize) -> [S; 2] {
         let f = &self.frames[frame];
-        self.point_bias_acceleration(st, f.body, c2(f.offset_xz_m))
+        self.point_bias_acceleration(st, f.body, constants(f.offset_xz_m))
     }
 
     /// Jacobian (2 × dof) of frame `frame`.
@@ -394,7 +455,7 @@ impl PlanarModel {
 
     /// World position of the centre of mass of `body`.
     pub fn body_com_in<S: Real>(&self, st: &BodyStates<S>, body: usize) -> [S; 2] {
-        self.point_position(st, body, c2(self.bodies[body].inertia.com_xz_m))
+        self.point_position(st, body, constants(self.bodies[body].inertia.com_xz_m))
     }
 
     /// Whole-body centre of mass at q, m.

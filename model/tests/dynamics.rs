@@ -534,3 +534,73 @@ fn inverse_dynamics_and_stance_angle_from_states_of_a_shifted_base_are_the_pinne
         .inverse_dynamics_in(&inertias, &st, &vec![0.0; model.dof()], &mut short)
         .is_err());
 }
+
+#[test]
+fn constant_mass_properties_give_the_lifted_ones_hyper_dual_parts() {
+    // The planner passes a fixed design's mass properties as `Constant`s, which scale a dual
+    // number part by part instead of applying the product rule to a factor with zero
+    // derivatives. Every part of the result must be the lifted computation's: the dropped
+    // terms are exact zeros, so the values are equal (not merely close).
+    use model::kinematics::{constants, BodyStates, Constant};
+    use model::num_dual::HyperDual64;
+    use model::robot::BodyInertia;
+    let model = adam();
+    let lifted = model.inertias::<HyperDual64>();
+    let fixed: Vec<BodyInertia<Constant>> = model
+        .bodies
+        .iter()
+        .map(|b| BodyInertia {
+            mass_kg: Constant(b.inertia.mass_kg),
+            com_xz_m: constants(b.inertia.com_xz_m),
+            inertia_yy_kgm2: Constant(b.inertia.inertia_yy_kgm2),
+        })
+        .collect();
+    let n = model.dof();
+    let mut r = rng(29);
+    let mut nonzero_second = 0;
+    for trial in 0..20 {
+        let q = random_q(&model, &mut r);
+        let dq = random_dq(&model, &mut r, 3.0);
+        let ddq = random_dq(&model, &mut r, 20.0);
+        // Seeds: ε1 on q_a, ε2 on q̇_b or q_b (a second derivative that is not zero).
+        let (a, b) = (2 + trial % (n - 2), (trial * 7) % n);
+        let seed = |v: &[f64], e1: Option<usize>, e2: Option<usize>| -> Vec<HyperDual64> {
+            v.iter()
+                .enumerate()
+                .map(|(i, &x)| {
+                    let d1 = if e1 == Some(i) { 1.0 } else { 0.0 };
+                    let d2 = if e2 == Some(i) { 1.0 } else { 0.0 };
+                    HyperDual64::new(x, d1, d2, 0.0)
+                })
+                .collect()
+        };
+        let (qh, dqh) = if trial % 2 == 0 {
+            (seed(&q, Some(a), Some(b)), seed(&dq, None, None))
+        } else {
+            (seed(&q, Some(a), None), seed(&dq, None, Some(b)))
+        };
+        let ddqh = seed(&ddq, None, None);
+        let mut st = BodyStates::zeroed();
+        model.body_states_into(&qh, &dqh, &mut st).expect("states");
+        let zero = HyperDual64::from(0.0);
+        let (mut with_lifted, mut with_constants) = (vec![zero; n], vec![zero; n]);
+        model
+            .inverse_dynamics_in(&lifted, &st, &ddqh, &mut with_lifted)
+            .expect("lifted");
+        model
+            .inverse_dynamics_in(&fixed, &st, &ddqh, &mut with_constants)
+            .expect("constants");
+        for (x, y) in with_lifted.iter().zip(&with_constants) {
+            assert_eq!(
+                (x.re, x.eps1, x.eps2, x.eps1eps2),
+                (y.re, y.eps1, y.eps2, y.eps1eps2),
+                "trial {trial}"
+            );
+            nonzero_second += usize::from(x.eps1eps2 != 0.0);
+        }
+    }
+    assert!(
+        nonzero_second > 20,
+        "{nonzero_second} non-zero second derivatives compared"
+    );
+}

@@ -49,8 +49,9 @@ use crate::config::PlannerConfig;
 use crate::nlp::lanes::Lanes;
 use crate::nlp::{DomainError, NlpProblem, SparsityPattern};
 use model::bezier;
-use model::kinematics::BodyStates;
+use model::kinematics::{constants, BodyStates, Constant};
 use model::num_dual::{Dual, Dual64, HyperDual, HyperDual64};
+use model::robot::BodyInertia;
 use model::robot::MAX_DOF;
 use model::Real;
 use std::collections::HashMap;
@@ -71,6 +72,12 @@ struct Scratch<S> {
     st: BodyStates<S>,
     /// Mass properties of each body (the first `bodies.len()`).
     inertias: [model::robot::BodyInertia<S>; model::robot::MAX_BODIES],
+    /// Joint accelerations (the first `dof` entries are used).
+    ddq: [S; MAX_DOF],
+    /// Stance-foot Jacobian, column by column.
+    jac: [[S; 2]; MAX_DOF],
+    /// Inverse-dynamics output.
+    r: [S; MAX_DOF],
 }
 
 impl<S: Real> Scratch<S> {
@@ -83,6 +90,9 @@ impl<S: Real> Scratch<S> {
                 com_xz_m: [z, z],
                 inertia_yy_kgm2: z,
             }; model::robot::MAX_BODIES],
+            ddq: [z; MAX_DOF],
+            jac: [[z, z]; MAX_DOF],
+            r: [z; MAX_DOF],
         }
     }
 }
@@ -299,6 +309,8 @@ pub struct HzdProblem {
     initial: Vec<f64>,
     total_mass_kg: f64,
     design: Option<DesignModel>,
+    /// The model's mass properties, body by body, as [`Constant`]s.
+    constant_inertias: Vec<BodyInertia<Constant>>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -422,6 +434,16 @@ impl HzdProblem {
             });
         }
         let total_mass_kg = biped.model.total_mass_kg();
+        let constant_inertias = biped
+            .model
+            .bodies
+            .iter()
+            .map(|b| BodyInertia {
+                mass_kg: Constant(b.inertia.mass_kg),
+                com_xz_m: constants(b.inertia.com_xz_m),
+                inertia_yy_kgm2: Constant(b.inertia.inertia_yy_kgm2),
+            })
+            .collect();
         let mut p = Self {
             biped,
             config,
@@ -437,6 +459,7 @@ impl HzdProblem {
             slack_weights: Vec::new(),
             initial,
             total_mass_kg,
+            constant_inertias,
             design,
         };
         p.build_blocks();
@@ -758,6 +781,17 @@ impl HzdProblem {
         ])
     }
 
+    /// The model's own mass properties as constants, unless a model block's depend on its
+    /// variables (co-design with exact inertia coupling): then `None`, and
+    /// [`Self::inertias_of`] gives them.
+    fn constant_inertias(&self, kind: Kind) -> Option<&[BodyInertia<Constant>]> {
+        let exact = self
+            .design
+            .as_ref()
+            .is_some_and(|d| d.spec.exact_inertia && Self::uses_model(kind));
+        (!exact).then_some(self.constant_inertias.as_slice())
+    }
+
     /// Body mass properties at the lengths of a model block's local variables: the cubic fits
     /// for thighs and shins under exact coupling, the model's own otherwise. Written into a
     /// caller's fixed array (no allocation or copy per evaluation); the first `bodies.len()`
@@ -817,7 +851,13 @@ impl HzdProblem {
         out: &mut [S],
         scratch: &mut Scratch<S>,
     ) -> Result<(), DomainError> {
-        let Scratch { st, inertias } = scratch;
+        let Scratch {
+            st,
+            inertias,
+            ddq,
+            jac,
+            r,
+        } = scratch;
         let design = self.design_joints_of(kind, z);
         let bp = &self.biped;
         let l = &self.layout;
@@ -833,15 +873,17 @@ impl HzdProblem {
                 let us = &z[3 * nq..3 * nq + nu];
                 bp.states_at_rest_base(qr, dqr, design, st)
                     .map_err(|_| DomainError)?;
-                let mut ddq = [S::zero(); MAX_DOF];
+                let n = bp.model.dof();
+                // Scratch arrays: only the first n entries are read, and the ones not set
+                // below must be zero.
+                ddq[..n].fill(S::zero());
                 for (i, &c) in bp.reduced.iter().enumerate() {
                     ddq[c] = z[2 * nq + i] * ACC_SCALE;
                 }
-                let n = bp.model.dof();
                 let foot = bp.legs.side(bp.stance).foot;
                 let p = bp.model.frame_position_in(st, foot);
                 let mut a = bp.model.frame_bias_acceleration_in(st, foot);
-                let mut jac = [[S::zero(); 2]; MAX_DOF];
+                jac[..n].fill([S::zero(); 2]);
                 bp.model
                     .point_jacobian_into(st, bp.model.frames[foot].body, p, |r, c, v| {
                         jac[c][r] = v;
@@ -849,16 +891,15 @@ impl HzdProblem {
                     });
                 ddq[0] = -a[0];
                 ddq[1] = -a[1];
-                let mut r = [S::zero(); MAX_DOF];
-                self.inertias_of(kind, z, inertias);
-                bp.model
-                    .inverse_dynamics_in(
-                        &inertias[..bp.model.bodies.len()],
-                        st,
-                        &ddq[..n],
-                        &mut r[..n],
-                    )
-                    .map_err(|_| DomainError)?;
+                let done = match self.constant_inertias(kind) {
+                    Some(c) => bp.model.inverse_dynamics_in(c, st, &ddq[..n], &mut r[..n]),
+                    None => {
+                        self.inertias_of(kind, z, inertias);
+                        let i = &inertias[..bp.model.bodies.len()];
+                        bp.model.inverse_dynamics_in(i, st, &ddq[..n], &mut r[..n])
+                    }
+                };
+                done.map_err(|_| DomainError)?;
                 let lam = [r[0], r[1]];
                 for (i, &c) in bp.reduced.iter().enumerate() {
                     out[i] = r[c] - jac[c][0] * lam[0] - jac[c][1] * lam[1];
@@ -877,7 +918,7 @@ impl HzdProblem {
                 // The hip-to-foot angle needs no pinned base: states with the base at rest.
                 bp.states_at_rest_base(qr, dqr, design, st)
                     .map_err(|_| DomainError)?;
-                let mut ddq = [S::zero(); MAX_DOF];
+                ddq[..bp.model.dof()].fill(S::zero());
                 for (i, &c) in bp.reduced.iter().enumerate() {
                     ddq[c] = z[2 * nq + i] * ACC_SCALE;
                 }
