@@ -307,21 +307,24 @@ impl PlanarModel {
             }
             let com = self.point_position(st, b, inertia.com_xz_m);
             let bias = self.point_bias_acceleration(st, b, inertia.com_xz_m);
-            // a = J q̈ + J̇ q̇, then f = m (a + g ẑ); generalized force Jᵀ f + J_θᵀ I θ̈.
-            let mut a = bias;
+            // a = J q̈ + J̇ q̇, then f = m (a + g ẑ); generalized force Jᵀ f + J_θᵀ I θ̈. The
+            // base's x and z columns of J are the unit vectors: their products with q̈ and f
+            // are the entries themselves (the products by 1 and 0 they replace add nothing but
+            // the sign of a zero).
             let mut nc = 0;
-            self.point_jacobian_into(st, b, com, |r, c, v| {
-                if let Some(e) = cols[..nc].iter_mut().find(|e| e.0 == c) {
-                    if r == 0 {
-                        e.1 = v
-                    } else {
-                        e.2 = v
-                    }
-                } else {
-                    cols[nc] = if r == 0 { (c, v, z) } else { (c, z, v) };
+            self.pitch_and_joint_columns(
+                st,
+                b,
+                com,
+                |c| st.sin_cos[c],
+                |c, col| {
+                    cols[nc] = (c, col[0], col[1]);
                     nc += 1;
-                }
-            });
+                },
+            );
+            let mut a = bias;
+            a[0] += ddq[0];
+            a[1] += ddq[1];
             for &(c, jx, jz) in &cols[..nc] {
                 a[0] += jx * ddq[c];
                 a[1] += jz * ddq[c];
@@ -330,6 +333,8 @@ impl PlanarModel {
                 inertia.mass_kg.times_left(a[0]),
                 inertia.mass_kg.times_left(a[1] + g),
             ];
+            out[0] += f[0];
+            out[1] += f[1];
             for &(c, jx, jz) in &cols[..nc] {
                 out[c] += jx * f[0] + jz * f[1];
             }

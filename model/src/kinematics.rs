@@ -378,14 +378,29 @@ impl PlanarModel {
         st: &BodyStates<S>,
         body: usize,
         p: [S; 2],
-        mut sin_cos: impl FnMut(usize) -> (S, S),
+        sin_cos: impl FnMut(usize) -> (S, S),
         mut set: impl FnMut(usize, usize, S),
     ) {
         set(0, 0, S::one());
         set(1, 1, S::one());
-        let r = perp(sub(p, st.pose[0].xz_m));
-        set(0, 2, r[0]);
-        set(1, 2, r[1]);
+        self.pitch_and_joint_columns(st, body, p, sin_cos, |c, col| {
+            set(0, c, col[0]);
+            set(1, c, col[1]);
+        });
+    }
+
+    /// The point Jacobian's columns other than the base's x and z (which are the unit
+    /// vectors): `column(coordinate, [∂x/∂q_c, ∂z/∂q_c])` for the base pitch, then for every
+    /// joint on the path to `body`, in path order.
+    pub(crate) fn pitch_and_joint_columns<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        body: usize,
+        p: [S; 2],
+        mut sin_cos: impl FnMut(usize) -> (S, S),
+        mut column: impl FnMut(usize, [S; 2]),
+    ) {
+        column(2, perp(sub(p, st.pose[0].xz_m)));
         for &j in &self.bodies[body].joint_path {
             let joint = &self.joints[j];
             let c = joint.body;
@@ -396,8 +411,7 @@ impl PlanarModel {
                 }
                 JointKind::Prismatic { axis_xz } => rot_sin_cos(sin_cos(c), constants(axis_xz)),
             };
-            set(0, joint.coordinate, col[0]);
-            set(1, joint.coordinate, col[1]);
+            column(joint.coordinate, col);
         }
     }
 
