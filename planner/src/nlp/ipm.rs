@@ -1527,7 +1527,7 @@ impl<'a> Ipm<'a> {
                     st += t.stats;
                 }
                 eprintln!(
-                    "kkt: {} factorizations {:?} ({} not finite, {} by feral; {} pairs at once, {} decided by the second), {} solves {:?}; total {:?}, eval {:?}",
+                    "kkt: {} factorizations {:?} ({} not finite, {} by feral; {} pairs at once, {} decided by the second), {} solves ({} refinement corrections) {:?}; total {:?}, eval {:?}",
                     st.factorizations,
                     st.factorization_time,
                     st.nonfinite,
@@ -1535,6 +1535,7 @@ impl<'a> Ipm<'a> {
                     self.paired_trials,
                     self.twin_accepted,
                     st.solves,
+                    st.corrections,
                     st.solve_time,
                     total,
                     self.prob.time
