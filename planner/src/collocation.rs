@@ -1027,10 +1027,6 @@ impl HzdProblem {
         (0..l.points()).flat_map(move |k| (0..l.nu).map(move |a| l.u(k) + a))
     }
 
-    fn local<T: Copy>(x: &[T], vars: &[usize]) -> Vec<T> {
-        vars.iter().map(|&i| x[i]).collect()
-    }
-
     /// Σ_k c_k Σ_a w_a (p + n): the Simpson sum of the absolute power.
     fn power_sum(&self, x: &[f64]) -> f64 {
         self.slack_weights.iter().map(|&(i, w)| w * x[i]).sum()
@@ -1358,13 +1354,17 @@ impl NlpProblem for HzdProblem {
     }
 
     fn constraints(&self, x: &[f64], values: &mut [f64]) -> Result<(), DomainError> {
-        let mut scratch = Scratch::new();
-        for blk in &self.blocks {
-            let z = Self::local(x, &blk.vars);
-            let out = &mut values[blk.row0..blk.row0 + blk.n_out];
-            self.eval_block_in(blk.kind, &z, out, &mut scratch)?;
-        }
-        Ok(())
+        // Blocks own consecutive rows in block order, so each writes its own run.
+        self.for_each_block(
+            values,
+            |blk| blk.n_out,
+            |work: &mut SweepWork<f64>, blk, out| {
+                let SweepWork { scratch, z, .. } = work;
+                z.clear();
+                z.extend(blk.vars.iter().map(|&i| x[i]));
+                self.eval_block_in(blk.kind, z, out, scratch)
+            },
+        )
     }
 
     fn jacobian_structure(&self) -> SparsityPattern {

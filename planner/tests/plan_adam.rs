@@ -171,7 +171,7 @@ fn plans_and_verifies_a_second_different_five_link_walker() {
     assert!(report.passed(1e-6), "{report}");
 }
 
-/// The Jacobian and Hessian are evaluated block by block on the rayon pool when called from
+/// The constraints, Jacobian and Hessian are evaluated block by block on the rayon pool when called from
 /// outside it and sequentially from inside it (a co-design sweep); both must give the same bits,
 /// or the same config would not give the same gait.
 #[test]
@@ -185,13 +185,15 @@ fn derivatives_are_bit_identical_in_parallel_and_sequentially() {
         .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
         .collect();
     let evaluate = || {
+        let mut g = vec![0.0; p.num_constraints()];
         let mut jac = vec![0.0; p.jacobian_structure().len()];
         let mut hess = vec![0.0; p.hessian_structure().len()];
+        p.constraints(&x, &mut g).expect("constraints");
         p.jacobian_values(&x, &mut jac).expect("jacobian");
         p.hessian_values(&x, 0.7, &lambda, &mut hess)
             .expect("hessian");
         let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<u64>>();
-        (bits(&jac), bits(&hess))
+        (bits(&g), bits(&jac), bits(&hess))
     };
     let parallel = evaluate();
     let sequential = rayon::ThreadPoolBuilder::new()
@@ -199,7 +201,11 @@ fn derivatives_are_bit_identical_in_parallel_and_sequentially() {
         .build()
         .expect("pool")
         .install(evaluate);
-    assert!(parallel.0.iter().any(|&b| b != 0) && parallel.1.iter().any(|&b| b != 0));
+    assert!(
+        parallel.0.iter().any(|&b| b != 0)
+            && parallel.1.iter().any(|&b| b != 0)
+            && parallel.2.iter().any(|&b| b != 0)
+    );
     assert_eq!(parallel, sequential);
 }
 
