@@ -275,6 +275,11 @@ struct Block {
     hess: Vec<(usize, usize)>,
     /// Slot in the global Hessian value array of each pair.
     hess_slots: Vec<usize>,
+    /// The seeds of a combined Jacobian and Hessian sweep ([`HzdProblem::block_jacobian_and_hessian`]):
+    /// the Hessian pairs `(a, Some(b))` in `hess` order, then `(j, None)` for every Jacobian
+    /// column no pair covers. Empty for kinds whose Jacobian is swept on its own
+    /// ([`HzdProblem::shares_jacobian_with_hessian`]).
+    seeds: Vec<(usize, Option<usize>)>,
 }
 
 impl Block {
@@ -480,6 +485,7 @@ impl HzdProblem {
             jac_vars: Vec::new(),
             hess: Vec::new(),
             hess_slots: Vec::new(),
+            seeds: Vec::new(),
         });
     }
 
@@ -675,6 +681,16 @@ impl HzdProblem {
                 .iter()
                 .map(|&(a, b)| slot(blk.vars[a], blk.vars[b], &mut hess))
                 .collect();
+            if Self::shares_jacobian_with_hessian(blk.kind) {
+                let covered = |j: usize| pairs.iter().any(|&(a, b)| a == j || b == j);
+                blk.seeds = pairs.iter().map(|&(a, b)| (a, Some(b))).collect();
+                blk.seeds.extend(
+                    blk.jac_vars
+                        .iter()
+                        .filter(|&&j| !covered(j))
+                        .map(|&j| (j, None)),
+                );
+            }
             blk.hess = pairs;
             built.push(blk);
         }
@@ -757,6 +773,29 @@ impl HzdProblem {
             })
             .collect();
         self.eval_block(kind, &zh, out)
+    }
+
+    /// Whether a block kind's Jacobian is read off its Hessian passes
+    /// ([`Self::block_jacobian_and_hessian`]): the kinds with Hessian pairs whose evaluation
+    /// divides no dual number by another. num-dual's `Dual` and `HyperDual` apply the same
+    /// first-order rules to sums, products, scalars and functions (the same products, added
+    /// in either order), so a hyper-dual pass's ε₁ and ε₂ parts are the `Dual` sweep's
+    /// Jacobian columns bit for bit; their quotient rules round differently (the stance-leg
+    /// angle's rate, `atan2`, the impact map's elimination), so those kinds keep their own
+    /// sweep. The test `merged_jacobian_and_hessian_are_the_separate_sweeps_bits` compares the
+    /// merged values with the separate sweeps' bits; it fails with `PhaseLift` or `Impact`
+    /// added here.
+    fn shares_jacobian_with_hessian(kind: Kind) -> bool {
+        matches!(
+            kind,
+            Kind::Dynamics
+                | Kind::OutputDynamics(_)
+                | Kind::OutputStart(_)
+                | Kind::Interval
+                | Kind::Power(_)
+                | Kind::SwingHeight
+                | Kind::SwingEnd
+        )
     }
 
     /// Whether a block kind evaluates the robot model (and so depends on the design).
@@ -1181,21 +1220,38 @@ impl HzdProblem {
         len: impl Fn(&Block) -> usize,
         f: impl Fn(&mut SweepWork<S>, &Block, &mut [f64]) -> Result<(), DomainError> + Sync + Send,
     ) -> Result<(), DomainError> {
-        use rayon::prelude::*;
+        self.for_each_run(self.runs(values, len), SweepWork::new, f)
+    }
+
+    /// Each block with its own run of `values` (`len(block)` entries each, in block order).
+    fn runs<'v>(&self, values: &'v mut [f64], len: impl Fn(&Block) -> usize) -> Vec<&'v mut [f64]> {
         let mut runs = Vec::with_capacity(self.blocks.len());
         let mut rest = values;
         for blk in &self.blocks {
             let (run, tail) = rest.split_at_mut(len(blk));
-            runs.push((blk, run));
+            runs.push(run);
             rest = tail;
         }
+        runs
+    }
+
+    /// `f(work, block, run)` for every block and its run (see [`Self::for_each_block`]), with
+    /// per-worker buffers from `init`.
+    fn for_each_run<W: Send, R: Send>(
+        &self,
+        runs: Vec<R>,
+        init: impl Fn() -> W + Sync + Send,
+        f: impl Fn(&mut W, &Block, R) -> Result<(), DomainError> + Sync + Send,
+    ) -> Result<(), DomainError> {
+        use rayon::prelude::*;
+        let runs: Vec<(&Block, R)> = self.blocks.iter().zip(runs).collect();
         if rayon::current_thread_index().is_some() {
-            let mut work = SweepWork::new();
+            let mut work = init();
             runs.into_iter()
                 .try_for_each(|(blk, run)| f(&mut work, blk, run))
         } else {
             runs.into_par_iter()
-                .try_for_each_init(SweepWork::new, |work, (blk, run)| f(work, blk, run))
+                .try_for_each_init(init, |work, (blk, run)| f(work, blk, run))
         }
     }
 
@@ -1296,6 +1352,124 @@ impl HzdProblem {
         Ok(())
     }
 
+    /// A block's Jacobian entries (into `jac`, [`Block::jac`] order) and Hessian contribution
+    /// (into `hess`, as [`Self::block_hessian`]) from one sweep over [`Block::seeds`]: lane l
+    /// is the `HyperDual64` evaluation of seed l, whose ε₁ (and ε₂) parts are the Jacobian
+    /// columns of its variables, as a `Dual64` sweep gives them
+    /// ([`Self::shares_jacobian_with_hessian`]). A Jacobian-only seed has no ε₂ and adds no
+    /// Hessian entry. For an active block of a sharing kind.
+    fn block_jacobian_and_hessian(
+        &self,
+        x: &[f64],
+        multipliers: &[f64],
+        blk: &Block,
+        work: &mut SweepWork<HyperDual<Lanes<SEED_LANES>>>,
+        jac: &mut [f64],
+        hess: &mut [f64],
+    ) -> Result<(), DomainError> {
+        let nv = blk.vars.len();
+        let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
+        let SweepWork {
+            scratch,
+            z,
+            out,
+            dense,
+        } = work;
+        dense.clear();
+        dense.resize(blk.n_out * nv, 0.0);
+        out.clear();
+        out.resize(blk.n_out, HyperDual::from(0.0));
+        let mut at = 0;
+        for seeds in blk.seeds.chunks(SEED_LANES) {
+            z.clear();
+            z.extend(blk.vars.iter().enumerate().map(|(i, &g)| {
+                let (mut eps1, mut eps2) = ([0.0; SEED_LANES], [0.0; SEED_LANES]);
+                for (l, &(a, b)) in seeds.iter().enumerate() {
+                    if i == a {
+                        eps1[l] = 1.0;
+                    }
+                    if b == Some(i) {
+                        eps2[l] = 1.0;
+                    }
+                }
+                HyperDual::new(
+                    Lanes::splat(x[g]),
+                    Lanes(eps1),
+                    Lanes(eps2),
+                    Lanes::splat(0.0),
+                )
+            }));
+            self.eval_block_in(blk.kind, z, out, scratch)?;
+            for (l, &(a, b)) in seeds.iter().enumerate() {
+                for (r, o) in out.iter().enumerate() {
+                    dense[r * nv + a] = o.eps1.0[l];
+                    if let Some(b) = b {
+                        dense[r * nv + b] = o.eps2.0[l];
+                    }
+                }
+                if b.is_some() {
+                    hess[at] = out
+                        .iter()
+                        .zip(mu)
+                        .map(|(o, m)| o.eps1eps2.0[l] * m)
+                        .sum::<f64>();
+                    at += 1;
+                }
+            }
+        }
+        for (v, &(r, j)) in jac.iter_mut().zip(&blk.jac) {
+            *v = dense[r * nv + j];
+        }
+        Ok(())
+    }
+
+    /// The Lagrangian Hessian from the blocks' contributions `parts` (each block's run in
+    /// block order, as [`Self::block_hessian`] writes them) and the objective's.
+    fn assemble_hessian(
+        &self,
+        x: &[f64],
+        objective_factor: f64,
+        multipliers: &[f64],
+        parts: &[f64],
+        values: &mut [f64],
+    ) {
+        values.fill(0.0);
+        // Blocks share Hessian slots: their contributions are added in block order, as a
+        // sequential loop would, whatever order they were computed in.
+        let mut at = 0;
+        for blk in &self.blocks {
+            let run = &parts[at..at + blk.hess.len()];
+            at += blk.hess.len();
+            // Skipped, not added as zeros: +0.0 would turn a −0.0 entry into +0.0.
+            if blk.inactive(multipliers) {
+                continue;
+            }
+            for (&slot, value) in blk.hess_slots.iter().zip(run) {
+                values[slot] += value;
+            }
+        }
+        if !self.with_cost {
+            for &slot in &self.obj_slots.torque {
+                values[slot] += 2.0 * FEASIBILITY_TORQUE_WEIGHT * objective_factor;
+            }
+        }
+        if self.with_cost && objective_factor != 0.0 {
+            let (k, t, d) = (
+                self.cost_factor(),
+                x[self.layout.duration()],
+                x[self.layout.length()],
+            );
+            let s = self.power_sum(x);
+            let sf = objective_factor * k;
+            for (n, &(_, w)) in self.slack_weights.iter().enumerate() {
+                values[self.obj_slots.t_slack[n]] += sf * w / d;
+                values[self.obj_slots.slack_d[n]] += -sf * t * w / (d * d);
+            }
+            values[self.obj_slots.t_d] += -sf * s / (d * d);
+            values[self.obj_slots.d_d] += 2.0 * sf * t * s / (d * d * d);
+        }
+    }
+
     /// Constraint bounds (lower, upper).
     pub fn constraint_bounds_vec(&self) -> (&[f64], &[f64]) {
         (&self.lower_g, &self.upper_g)
@@ -1394,47 +1568,43 @@ impl NlpProblem for HzdProblem {
         multipliers: &[f64],
         values: &mut [f64],
     ) -> Result<(), DomainError> {
-        values.fill(0.0);
-        // Blocks share Hessian slots: their contributions are added in block order, as a
-        // sequential loop would, whatever order they were computed in.
         let mut parts = vec![0.0; self.blocks.iter().map(|b| b.hess.len()).sum()];
         self.for_each_block(
             &mut parts,
             |blk| blk.hess.len(),
             |work, blk, run| self.block_hessian(x, multipliers, blk, work, run),
         )?;
-        let mut at = 0;
-        for blk in &self.blocks {
-            let run = &parts[at..at + blk.hess.len()];
-            at += blk.hess.len();
-            // Skipped, not added as zeros: +0.0 would turn a −0.0 entry into +0.0.
-            if blk.inactive(multipliers) {
-                continue;
-            }
-            for (&slot, value) in blk.hess_slots.iter().zip(run) {
-                values[slot] += value;
-            }
-        }
-        if !self.with_cost {
-            for &slot in &self.obj_slots.torque {
-                values[slot] += 2.0 * FEASIBILITY_TORQUE_WEIGHT * objective_factor;
-            }
-        }
-        if self.with_cost && objective_factor != 0.0 {
-            let (k, t, d) = (
-                self.cost_factor(),
-                x[self.layout.duration()],
-                x[self.layout.length()],
-            );
-            let s = self.power_sum(x);
-            let sf = objective_factor * k;
-            for (n, &(_, w)) in self.slack_weights.iter().enumerate() {
-                values[self.obj_slots.t_slack[n]] += sf * w / d;
-                values[self.obj_slots.slack_d[n]] += -sf * t * w / (d * d);
-            }
-            values[self.obj_slots.t_d] += -sf * s / (d * d);
-            values[self.obj_slots.d_d] += 2.0 * sf * t * s / (d * d * d);
-        }
+        self.assemble_hessian(x, objective_factor, multipliers, &parts, values);
+        Ok(())
+    }
+
+    fn jacobian_and_hessian_values(
+        &self,
+        x: &[f64],
+        jacobian: &mut [f64],
+        objective_factor: f64,
+        multipliers: &[f64],
+        hessian: &mut [f64],
+    ) -> Result<(), DomainError> {
+        let mut parts = vec![0.0; self.blocks.iter().map(|b| b.hess.len()).sum()];
+        let runs: Vec<_> = self
+            .runs(jacobian, |blk| blk.jac.len())
+            .into_iter()
+            .zip(self.runs(&mut parts, |blk| blk.hess.len()))
+            .collect();
+        self.for_each_run(
+            runs,
+            || (SweepWork::new(), SweepWork::new()),
+            |(jac_work, hess_work), blk, (jac, hess)| {
+                if blk.seeds.is_empty() || blk.inactive(multipliers) {
+                    self.block_jacobian(x, blk, jac_work, jac)?;
+                    self.block_hessian(x, multipliers, blk, hess_work, hess)
+                } else {
+                    self.block_jacobian_and_hessian(x, multipliers, blk, hess_work, jac, hess)
+                }
+            },
+        )?;
+        self.assemble_hessian(x, objective_factor, multipliers, &parts, hessian);
         Ok(())
     }
 }

@@ -370,3 +370,43 @@ fn the_native_backend_plans_a_gait_that_verifies() {
     println!("{report}");
     assert!(report.passed(1e-6), "{report}");
 }
+
+/// The interior point asks for the Jacobian and the Hessian together after an accepted step,
+/// and the collocation problem then reads the Jacobian off the Hessian's hyper-dual passes
+/// for the kinds whose first-order rules are `Dual`'s. The values must be those of the two
+/// separate sweeps bit for bit (or the plan would depend on which path ran), for active and
+/// inactive blocks (all multipliers zero: no Hessian pass) alike.
+#[test]
+fn merged_jacobian_and_hessian_are_the_separate_sweeps_bits() {
+    let (model, _, config) = setup();
+    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
+    let probe = HzdProblem::new(bp.clone(), config.clone(), Vec::new(), true).expect("problem");
+    for (step, duration) in [(0.25, 0.65), (0.18, 0.85)] {
+        let x = initial_guess(&bp, &probe.layout, step, duration).expect("guess");
+        let p = HzdProblem::new(bp.clone(), config.clone(), x.clone(), true).expect("problem");
+        let m = p.num_constraints();
+        // Multipliers of every sign and size, with a stretch of zeros (inactive blocks).
+        let lambda: Vec<f64> = (0..m)
+            .map(|i| {
+                if (m / 3..m / 3 + 60).contains(&i) {
+                    0.0
+                } else {
+                    (((i * 7919) % 13) as f64 / 13.0 - 0.5) * 10f64.powi((i % 5) as i32 - 2)
+                }
+            })
+            .collect();
+        let (nj, nh) = (p.jacobian_structure().len(), p.hessian_structure().len());
+        let (mut jac, mut hess) = (vec![0.0; nj], vec![0.0; nh]);
+        p.jacobian_values(&x, &mut jac).expect("jacobian");
+        p.hessian_values(&x, 0.3, &lambda, &mut hess)
+            .expect("hessian");
+        let (mut jac2, mut hess2) = (vec![f64::NAN; nj], vec![f64::NAN; nh]);
+        p.jacobian_and_hessian_values(&x, &mut jac2, 0.3, &lambda, &mut hess2)
+            .expect("both");
+        let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<u64>>();
+        assert!(jac.iter().filter(|v| **v != 0.0).count() > nj / 2);
+        assert!(hess.iter().filter(|v| **v != 0.0).count() > nh / 2);
+        assert_eq!(bits(&jac), bits(&jac2), "Jacobian at ({step}, {duration})");
+        assert_eq!(bits(&hess), bits(&hess2), "Hessian at ({step}, {duration})");
+    }
+}

@@ -120,4 +120,21 @@ pub trait NlpProblem {
         multipliers: &[f64],
         values: &mut [f64],
     ) -> Result<(), DomainError>;
+
+    /// [`NlpProblem::jacobian_values`] and [`NlpProblem::hessian_values`] at one point, for
+    /// a solver that needs both there (the interior point after accepting a step). The
+    /// default calls the two; a problem whose Hessian passes give the Jacobian on the way
+    /// (forward-mode hyper-dual numbers carry the first derivatives) overrides it. The values
+    /// must be those of the two calls, bit for bit.
+    fn jacobian_and_hessian_values(
+        &self,
+        x: &[f64],
+        jacobian: &mut [f64],
+        objective_factor: f64,
+        multipliers: &[f64],
+        hessian: &mut [f64],
+    ) -> Result<(), DomainError> {
+        self.jacobian_values(x, jacobian)?;
+        self.hessian_values(x, objective_factor, multipliers, hessian)
+    }
 }
