@@ -35,6 +35,10 @@ pub struct PlanarBiped {
     pub output_coords: Vec<usize>,
 }
 
+/// Full q and q̇ of one state, and the full q̈ of each of several reduced accelerations
+/// ([`PlanarBiped::full_states`]).
+pub type FullStates<S> = ([Vec<S>; 2], Vec<Vec<S>>);
+
 impl PlanarBiped {
     /// Prepares `model` with every design joint at `design_values` (in design-joint order, or all
     /// zero when empty) for a step on `stance`.
@@ -127,29 +131,62 @@ impl PlanarBiped {
         ddqr: &[S],
         design: Option<[S; 2]>,
     ) -> Result<[Vec<S>; 3]> {
+        let ([q, dq], mut ddqs) = self.full_states_design(qr, dqr, &[ddqr], design)?;
+        Ok([q, dq, ddqs.remove(0)])
+    }
+
+    /// [`Self::full_state`] for several reduced accelerations at one (q_r, q̇_r): one
+    /// kinematics pass, and each full q̈ bit for bit the one `full_state` gives for it.
+    pub fn full_states<S: Real>(
+        &self,
+        qr: &[S],
+        dqr: &[S],
+        ddqrs: &[&[S]],
+    ) -> Result<FullStates<S>> {
+        self.full_states_design(qr, dqr, ddqrs, None)
+    }
+
+    fn full_states_design<S: Real>(
+        &self,
+        qr: &[S],
+        dqr: &[S],
+        ddqrs: &[&[S]],
+        design: Option<[S; 2]>,
+    ) -> Result<FullStates<S>> {
         let n = self.model.dof();
         let z = S::zero();
-        let (mut q, mut dq, mut ddq) = (vec![z; n], vec![z; n], vec![z; n]);
+        let (mut q, mut dq) = (vec![z; n], vec![z; n]);
         self.fill_coordinates(qr, dqr, design, &mut q, &mut dq);
-        for (i, &c) in self.reduced.iter().enumerate() {
-            ddq[c] = ddqr[i];
-        }
         let mut st = BodyStates::zeroed();
         self.model.body_states_into(&q, &dq, &mut st)?;
         let foot = self.legs.side(self.stance).foot;
         let p = self.model.frame_position_in(&st, foot);
         let v = self.model.frame_velocity_in(&st, foot);
-        let mut a = self.model.frame_bias_acceleration_in(&st, foot);
-        self.model
-            .point_jacobian_into(&st, self.model.frames[foot].body, p, |r, c, val| {
-                a[r] += val * ddq[c]
-            });
+        let bias = self.model.frame_bias_acceleration_in(&st, foot);
+        let ddqs = ddqrs
+            .iter()
+            .map(|ddqr| {
+                let mut ddq = vec![z; n];
+                for (i, &c) in self.reduced.iter().enumerate() {
+                    ddq[c] = ddqr[i];
+                }
+                let mut a = bias;
+                self.model.point_jacobian_into(
+                    &st,
+                    self.model.frames[foot].body,
+                    p,
+                    |r, c, val| a[r] += val * ddq[c],
+                );
+                ddq[0] = -a[0];
+                ddq[1] = -a[1];
+                ddq
+            })
+            .collect();
         for k in 0..2 {
             q[k] = -p[k];
             dq[k] = -v[k];
-            ddq[k] = -a[k];
         }
-        Ok([q, dq, ddq])
+        Ok(([q, dq], ddqs))
     }
 
     /// The body states at the reduced state (q_r, q̇_r), with the design joints set as in

@@ -171,6 +171,9 @@ pub struct Step {
     pub impact_height_m: f64,
 }
 
+/// The outputs y, ẏ and ÿ, one entry per output.
+type Outputs = (Vec<f64>, Vec<f64>, Vec<f64>);
+
 impl ClosedLoop {
     /// Builds the closed loop of `gait` on `model`.
     pub fn new(model: &PlanarModel, gait: &GaitFile, options: VerifyOptions) -> Result<Self> {
@@ -275,30 +278,40 @@ impl ClosedLoop {
     }
 
     /// Outputs y, ẏ and ÿ for reduced accelerations `ddqr`.
-    fn outputs(
-        &self,
-        qr: &[f64],
-        dqr: &[f64],
-        ddqr: &[f64],
-    ) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    fn outputs(&self, qr: &[f64], dqr: &[f64], ddqr: &[f64]) -> Result<Outputs> {
+        Ok(self.outputs_for(qr, dqr, &[ddqr])?.remove(0))
+    }
+
+    /// [`Self::outputs`] for several reduced accelerations at one state, from one pass of
+    /// the kinematics for the full state and one for the stance-leg angle (each result bit
+    /// for bit its own `outputs`).
+    fn outputs_for(&self, qr: &[f64], dqr: &[f64], ddqrs: &[&[f64]]) -> Result<Vec<Outputs>> {
         let bp = &self.biped;
-        let [q, dq, ddq] = bp.full_state(qr, dqr, ddqr)?;
-        let th = bp
-            .model
-            .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)?;
+        let ([q, dq], ddqs) = bp.full_states(qr, dqr, ddqrs)?;
+        let mut st = model::kinematics::BodyStates::zeroed();
+        bp.model.body_states_into(&q, &dq, &mut st)?;
         let span = self.theta_minus - self.theta_plus;
-        let tau = (th.theta - self.theta_plus) / span;
-        let (td, tdd) = (th.rate / span, th.accel / span);
         let m = self.alpha.len();
-        let (mut y, mut dy, mut ddy) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-        for o in 0..m {
-            let (b0, b1, b2) = bezier::eval_all(&self.alpha[o], tau);
-            let j = bp.output_coords[o];
-            y[o] = qr[j] - b0;
-            dy[o] = dqr[j] - b1 * td;
-            ddy[o] = ddqr[j] - b2 * td * td - b1 * tdd;
-        }
-        Ok((y, dy, ddy))
+        ddqrs
+            .iter()
+            .zip(&ddqs)
+            .map(|(ddqr, ddq)| {
+                let th = bp
+                    .model
+                    .stance_leg_angle_derivatives_in(&st, ddq, &bp.legs, bp.stance)?;
+                let tau = (th.theta - self.theta_plus) / span;
+                let (td, tdd) = (th.rate / span, th.accel / span);
+                let (mut y, mut dy, mut ddy) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+                for o in 0..m {
+                    let (b0, b1, b2) = bezier::eval_all(&self.alpha[o], tau);
+                    let j = bp.output_coords[o];
+                    y[o] = qr[j] - b0;
+                    dy[o] = dqr[j] - b1 * td;
+                    ddy[o] = ddqr[j] - b2 * td * td - b1 * tdd;
+                }
+                Ok((y, dy, ddy))
+            })
+            .collect()
     }
 
     /// The closed-loop vector field: (q̇_r, q̈_r) and the torque used.
@@ -347,15 +360,17 @@ impl ClosedLoop {
             inputs[k + 1][k] = 1.0;
         }
         let inputs: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
-        let mut accelerations = self.accelerations_for(&q, &dq, &inputs)?.into_iter();
+        let all = self.accelerations_for(&q, &dq, &inputs)?;
+        let slices: Vec<&[f64]> = all.iter().map(Vec::as_slice).collect();
+        let mut outputs = self.outputs_for(qr, dqr, &slices)?.into_iter();
+        let (y, dy, ddy0) = outputs.next().unwrap_or_default();
+        let mut accelerations = all.into_iter();
         let a0 = accelerations.next().unwrap_or_default();
-        let (y, dy, ddy0) = self.outputs(qr, dqr, &a0)?;
         let m = y.len();
         let mut big_a = DMatrix::zeros(m, nu);
         let mut cols = Vec::with_capacity(nu);
-        for (k, ak) in accelerations.enumerate() {
+        for (k, (ak, (_, _, ddyk))) in accelerations.zip(outputs).enumerate() {
             let col: Vec<f64> = ak.iter().zip(&a0).map(|(a, b)| a - b).collect();
-            let (_, _, ddyk) = self.outputs(qr, dqr, &ak)?;
             for o in 0..m {
                 big_a[(o, k)] = ddyk[o] - ddy0[o];
             }
