@@ -69,6 +69,20 @@ impl PlanarModel {
         self.bodies.iter().map(|b| lift(&b.inertia)).collect()
     }
 
+    /// The model's mass properties, one per body, as [`Constant`](crate::kinematics::Constant)s
+    /// (for [`Self::inverse_dynamics_in`] when they are not being differentiated).
+    pub fn constant_inertias(&self) -> Vec<BodyInertia<crate::kinematics::Constant>> {
+        use crate::kinematics::{constants, Constant};
+        self.bodies
+            .iter()
+            .map(|b| BodyInertia {
+                mass_kg: Constant(b.inertia.mass_kg),
+                com_xz_m: constants(b.inertia.com_xz_m),
+                inertia_yy_kgm2: Constant(b.inertia.inertia_yy_kgm2),
+            })
+            .collect()
+    }
+
     /// D(q) and H(q, q̇) with the model's own mass properties.
     pub fn dynamics<S: Real>(&self, q: &[S], dq: &[S]) -> Result<Dynamics<S>> {
         self.dynamics_with(&self.inertias(), q, dq)

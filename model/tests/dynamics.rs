@@ -541,20 +541,11 @@ fn constant_mass_properties_give_the_lifted_ones_hyper_dual_parts() {
     // number part by part instead of applying the product rule to a factor with zero
     // derivatives. Every part of the result must be the lifted computation's: the dropped
     // terms are exact zeros, so the values are equal (not merely close).
-    use model::kinematics::{constants, BodyStates, Constant};
+    use model::kinematics::BodyStates;
     use model::num_dual::HyperDual64;
-    use model::robot::BodyInertia;
     let model = adam();
     let lifted = model.inertias::<HyperDual64>();
-    let fixed: Vec<BodyInertia<Constant>> = model
-        .bodies
-        .iter()
-        .map(|b| BodyInertia {
-            mass_kg: Constant(b.inertia.mass_kg),
-            com_xz_m: constants(b.inertia.com_xz_m),
-            inertia_yy_kgm2: Constant(b.inertia.inertia_yy_kgm2),
-        })
-        .collect();
+    let fixed = model.constant_inertias();
     let n = model.dof();
     let mut r = rng(29);
     let mut nonzero_second = 0;

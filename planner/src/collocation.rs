@@ -49,7 +49,7 @@ use crate::config::PlannerConfig;
 use crate::nlp::lanes::Lanes;
 use crate::nlp::{DomainError, NlpProblem, SparsityPattern};
 use model::bezier;
-use model::kinematics::{constants, BodyStates, Constant};
+use model::kinematics::{BodyStates, Constant};
 use model::num_dual::{Dual, Dual64, HyperDual, HyperDual64};
 use model::robot::BodyInertia;
 use model::robot::MAX_DOF;
@@ -115,6 +115,43 @@ impl<S: Real> SweepWork<S> {
             dense: Vec::new(),
         }
     }
+
+    /// Zeroed outputs (`n_out`) and dense Jacobian (`n_out` × `nv`) for a block's sweep.
+    fn prepare(&mut self, n_out: usize, nv: usize) {
+        self.dense.clear();
+        self.dense.resize(n_out * nv, 0.0);
+        self.out.clear();
+        self.out.resize(n_out, S::zero());
+    }
+}
+
+/// Fills `z` with a block's local variables at `x` (global indices `vars`) as four-lane
+/// hyper-dual numbers: lane l has ε₁ on local variable a and ε₂ on b for the l-th seed
+/// (a, Some(b)), or ε₁ alone for (a, None) (at most [`SEED_LANES`] seeds).
+fn seed_hyper_duals(
+    x: &[f64],
+    vars: &[usize],
+    seeds: impl Iterator<Item = (usize, Option<usize>)> + Clone,
+    z: &mut Vec<HyperDual<Lanes<SEED_LANES>>>,
+) {
+    z.clear();
+    z.extend(vars.iter().enumerate().map(|(i, &g)| {
+        let (mut eps1, mut eps2) = ([0.0; SEED_LANES], [0.0; SEED_LANES]);
+        for (l, (a, b)) in seeds.clone().enumerate() {
+            if i == a {
+                eps1[l] = 1.0;
+            }
+            if b == Some(i) {
+                eps2[l] = 1.0;
+            }
+        }
+        HyperDual::new(
+            Lanes::splat(x[g]),
+            Lanes(eps1),
+            Lanes(eps2),
+            Lanes::splat(0.0),
+        )
+    }));
 }
 
 /// Where each variable lives in x.
@@ -439,16 +476,7 @@ impl HzdProblem {
             });
         }
         let total_mass_kg = biped.model.total_mass_kg();
-        let constant_inertias = biped
-            .model
-            .bodies
-            .iter()
-            .map(|b| BodyInertia {
-                mass_kg: Constant(b.inertia.mass_kg),
-                com_xz_m: constants(b.inertia.com_xz_m),
-                inertia_yy_kgm2: Constant(b.inertia.inertia_yy_kgm2),
-            })
-            .collect();
+        let constant_inertias = biped.model.constant_inertias();
         let mut p = Self {
             biped,
             config,
@@ -1265,16 +1293,13 @@ impl HzdProblem {
         values: &mut [f64],
     ) -> Result<(), DomainError> {
         let nv = blk.vars.len();
+        work.prepare(blk.n_out, nv);
         let SweepWork {
             scratch,
             z,
             out,
             dense,
         } = work;
-        dense.clear();
-        dense.resize(blk.n_out * nv, 0.0);
-        out.clear();
-        out.resize(blk.n_out, Dual::from(0.0));
         for chunk in blk.jac_vars.chunks(SEED_LANES) {
             z.clear();
             z.extend(blk.vars.iter().enumerate().map(|(i, &g)| {
@@ -1321,24 +1346,7 @@ impl HzdProblem {
         out.resize(blk.n_out, HyperDual::from(0.0));
         let mut at = 0;
         for pairs in blk.hess.chunks(SEED_LANES) {
-            z.clear();
-            z.extend(blk.vars.iter().enumerate().map(|(i, &g)| {
-                let (mut eps1, mut eps2) = ([0.0; SEED_LANES], [0.0; SEED_LANES]);
-                for (l, &(a, b)) in pairs.iter().enumerate() {
-                    if i == a {
-                        eps1[l] = 1.0;
-                    }
-                    if i == b {
-                        eps2[l] = 1.0;
-                    }
-                }
-                HyperDual::new(
-                    Lanes::splat(x[g]),
-                    Lanes(eps1),
-                    Lanes(eps2),
-                    Lanes::splat(0.0),
-                )
-            }));
+            seed_hyper_duals(x, &blk.vars, pairs.iter().map(|&(a, b)| (a, Some(b))), z);
             self.eval_block_in(blk.kind, z, out, scratch)?;
             for l in 0..pairs.len() {
                 values[at] = out
@@ -1369,36 +1377,16 @@ impl HzdProblem {
     ) -> Result<(), DomainError> {
         let nv = blk.vars.len();
         let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
+        work.prepare(blk.n_out, nv);
         let SweepWork {
             scratch,
             z,
             out,
             dense,
         } = work;
-        dense.clear();
-        dense.resize(blk.n_out * nv, 0.0);
-        out.clear();
-        out.resize(blk.n_out, HyperDual::from(0.0));
         let mut at = 0;
         for seeds in blk.seeds.chunks(SEED_LANES) {
-            z.clear();
-            z.extend(blk.vars.iter().enumerate().map(|(i, &g)| {
-                let (mut eps1, mut eps2) = ([0.0; SEED_LANES], [0.0; SEED_LANES]);
-                for (l, &(a, b)) in seeds.iter().enumerate() {
-                    if i == a {
-                        eps1[l] = 1.0;
-                    }
-                    if b == Some(i) {
-                        eps2[l] = 1.0;
-                    }
-                }
-                HyperDual::new(
-                    Lanes::splat(x[g]),
-                    Lanes(eps1),
-                    Lanes(eps2),
-                    Lanes::splat(0.0),
-                )
-            }));
+            seed_hyper_duals(x, &blk.vars, seeds.iter().copied(), z);
             self.eval_block_in(blk.kind, z, out, scratch)?;
             for (l, &(a, b)) in seeds.iter().enumerate() {
                 for (r, o) in out.iter().enumerate() {

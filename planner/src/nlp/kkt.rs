@@ -592,6 +592,25 @@ mod tests {
         }
     }
 
+    /// Lower-triangle triplets of an n × n Hessian with bandwidth 2: entry (i, j), j ≥ i − 2,
+    /// is `value(i, j)` (row by row), or structurally absent where that is `None`.
+    fn banded_hessian(
+        n: usize,
+        mut value: impl FnMut(usize, usize) -> Option<f64>,
+    ) -> (Vec<usize>, Vec<usize>, Vec<f64>) {
+        let (mut hr, mut hc, mut hv) = (Vec::new(), Vec::new(), Vec::new());
+        for i in 0..n {
+            for j in i.saturating_sub(2)..=i {
+                if let Some(v) = value(i, j) {
+                    hr.push(i);
+                    hc.push(j);
+                    hv.push(v);
+                }
+            }
+        }
+        (hr, hc, hv)
+    }
+
     /// Triplets of an m × n banded Jacobian: row r has 3 entries from column r n / m on, entry
     /// (r, c) `value(c)`.
     fn banded_jacobian(
@@ -673,17 +692,11 @@ mod tests {
     fn faer_and_the_feral_fallback_agree_with_a_dense_eigendecomposition() {
         let (n, m) = (45_usize, 27_usize);
         let mut next = uniform(12_345);
-        let (mut hr, mut hc, mut hv) = (Vec::new(), Vec::new(), Vec::new());
-        for i in 0..n {
-            for j in i.saturating_sub(2)..=i {
-                if i % 3 == 2 && (i == j || j % 3 == 2) {
-                    continue; // the linear variables: no curvature
-                }
-                hr.push(i);
-                hc.push(j);
-                hv.push(if i == j { 3.0 * next() } else { next() });
-            }
-        }
+        let (hr, hc, hv) = banded_hessian(n, |i, j| {
+            // The linear variables: no curvature.
+            let linear = i % 3 == 2 && (i == j || j % 3 == 2);
+            (!linear).then(|| if i == j { 3.0 * next() } else { next() })
+        });
         let (jr, jc, jv) = banded_jacobian(n, m, |c| next() + if c % 3 == 2 { 2.0 } else { 0.0 });
         let dual = vec![-1e-9; m];
         let masked = vec![false; n];
@@ -730,19 +743,14 @@ mod tests {
     fn refinement_corrects_a_badly_scaled_solve_to_the_tolerance_and_stops() {
         let (n, m) = (60_usize, 36_usize);
         let mut next = uniform(777);
-        let (mut hr, mut hc, mut hv) = (Vec::new(), Vec::new(), Vec::new());
-        for i in 0..n {
-            for j in i.saturating_sub(2)..=i {
-                hr.push(i);
-                hc.push(j);
-                let scale = 10f64.powi(((i * 7) % 21) as i32 - 10);
-                hv.push(if i == j {
-                    scale * (2.0 + next())
-                } else {
-                    next()
-                });
-            }
-        }
+        let (hr, hc, hv) = banded_hessian(n, |i, j| {
+            let scale = 10f64.powi(((i * 7) % 21) as i32 - 10);
+            Some(if i == j {
+                scale * (2.0 + next())
+            } else {
+                next()
+            })
+        });
         let (jr, jc, jv) = banded_jacobian(n, m, |_| next());
         let dual = vec![-1e-8; m];
         let dense = dense_kkt(
@@ -779,20 +787,15 @@ mod tests {
     fn a_factor_faer_cannot_finish_fails_and_a_perturbed_one_succeeds() {
         let (n, m) = (45_usize, 27_usize);
         let mut next = uniform(2);
-        let (mut hr, mut hc, mut hv) = (Vec::new(), Vec::new(), Vec::new());
-        for i in 0..n {
-            for j in i.saturating_sub(2)..=i {
-                hr.push(i);
-                hc.push(j);
-                hv.push(if i % 3 == 2 {
-                    0.0 // a linear variable: no curvature
-                } else if i == j {
-                    3.0 * next()
-                } else {
-                    next()
-                });
-            }
-        }
+        let (hr, hc, hv) = banded_hessian(n, |i, j| {
+            Some(if i % 3 == 2 {
+                0.0 // a linear variable: no curvature
+            } else if i == j {
+                3.0 * next()
+            } else {
+                next()
+            })
+        });
         let (jr, jc, jv) = banded_jacobian(n, m, |_| next());
         let masked = vec![false; n];
         let mut k = KktSystem::new(n, m, (&hr, &hc), (&jr, &jc)).unwrap();
