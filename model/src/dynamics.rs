@@ -277,9 +277,10 @@ impl PlanarModel {
     /// base position and base linear velocity: a caller that needs the base shifted (a pinned
     /// stance foot at the origin) may pass states computed before the shift.
     ///
-    /// The mass properties are scalars of the states' type, or [`Constant`](crate::kinematics::Constant)s when they do not
-    /// depend on the variables being differentiated (a fixed design): the same values with
-    /// fewer dual-number operations.
+    /// The mass properties are scalars of the states' type, or
+    /// [`Constant`](crate::kinematics::Constant)s when they do not depend on the variables
+    /// being differentiated (a fixed design): the same values with fewer dual-number
+    /// operations.
     pub fn inverse_dynamics_in<S: Real, I: Coefficient<S>>(
         &self,
         inertias: &[BodyInertia<I>],

@@ -308,18 +308,22 @@ struct Block {
     jac: Vec<(usize, usize)>,
     /// Local vars with at least one Jacobian entry.
     jac_vars: Vec<usize>,
-    /// Local variable pairs (a ≥ b by global index) with a structurally non-zero Hessian.
-    hess: Vec<(usize, usize)>,
+    /// Hyper-dual seeds: first the local variable pairs `(a, Some(b))` (a ≥ b by global
+    /// index) with a structurally non-zero Hessian, one per `hess_slots` entry; then, for the
+    /// kinds whose Jacobian is read off these passes
+    /// ([`HzdProblem::shares_jacobian_with_hessian`]), `(j, None)` for every Jacobian column
+    /// no pair covers.
+    seeds: Vec<(usize, Option<usize>)>,
     /// Slot in the global Hessian value array of each pair.
     hess_slots: Vec<usize>,
-    /// The seeds of a combined Jacobian and Hessian sweep ([`HzdProblem::block_jacobian_and_hessian`]):
-    /// the Hessian pairs `(a, Some(b))` in `hess` order, then `(j, None)` for every Jacobian
-    /// column no pair covers. Empty for kinds whose Jacobian is swept on its own
-    /// ([`HzdProblem::shares_jacobian_with_hessian`]).
-    seeds: Vec<(usize, Option<usize>)>,
 }
 
 impl Block {
+    /// The Hessian pairs: the first seeds.
+    fn pairs(&self) -> &[(usize, Option<usize>)] {
+        &self.seeds[..self.hess_slots.len()]
+    }
+
     /// Whether all of this block's multipliers are zero (it adds nothing to the Hessian).
     fn inactive(&self, multipliers: &[f64]) -> bool {
         multipliers[self.row0..self.row0 + self.n_out]
@@ -511,9 +515,8 @@ impl HzdProblem {
             n_out: lower.len(),
             jac: Vec::new(),
             jac_vars: Vec::new(),
-            hess: Vec::new(),
-            hess_slots: Vec::new(),
             seeds: Vec::new(),
+            hess_slots: Vec::new(),
         });
     }
 
@@ -709,9 +712,9 @@ impl HzdProblem {
                 .iter()
                 .map(|&(a, b)| slot(blk.vars[a], blk.vars[b], &mut hess))
                 .collect();
+            blk.seeds = pairs.iter().map(|&(a, b)| (a, Some(b))).collect();
             if Self::shares_jacobian_with_hessian(blk.kind) {
                 let covered = |j: usize| pairs.iter().any(|&(a, b)| a == j || b == j);
-                blk.seeds = pairs.iter().map(|&(a, b)| (a, Some(b))).collect();
                 blk.seeds.extend(
                     blk.jac_vars
                         .iter()
@@ -719,7 +722,6 @@ impl HzdProblem {
                         .map(|&j| (j, None)),
                 );
             }
-            blk.hess = pairs;
             built.push(blk);
         }
         self.blocks = built;
@@ -804,7 +806,7 @@ impl HzdProblem {
     }
 
     /// Whether a block kind's Jacobian is read off its Hessian passes
-    /// ([`Self::block_jacobian_and_hessian`]): the kinds with Hessian pairs whose evaluation
+    /// ([`Self::block_hyper_sweep`]): the kinds with Hessian pairs whose evaluation
     /// divides no dual number by another. num-dual's `Dual` and `HyperDual` apply the same
     /// first-order rules to sums, products, scalars and functions (the same products, added
     /// in either order), so a hyper-dual pass's ε₁ and ε₂ parts are the `Dual` sweep's
@@ -851,7 +853,7 @@ impl HzdProblem {
     /// The model's own mass properties as constants, unless a model block's depend on its
     /// variables (co-design with exact inertia coupling): then `None`, and
     /// [`Self::inertias_of`] gives them.
-    fn constant_inertias(&self, kind: Kind) -> Option<&[BodyInertia<Constant>]> {
+    fn constant_inertias_for(&self, kind: Kind) -> Option<&[BodyInertia<Constant>]> {
         let exact = self
             .design
             .as_ref()
@@ -958,7 +960,7 @@ impl HzdProblem {
                     });
                 ddq[0] = -a[0];
                 ddq[1] = -a[1];
-                let done = match self.constant_inertias(kind) {
+                let done = match self.constant_inertias_for(kind) {
                     Some(c) => bp.model.inverse_dynamics_in(c, st, &ddq[..n], &mut r[..n]),
                     None => {
                         self.inertias_of(kind, z, inertias);
@@ -1208,7 +1210,7 @@ impl HzdProblem {
             if let Some(e) = out.iter_mut().find(|e| e.0 == name) {
                 e.1 += 1;
             } else {
-                out.push((name, 1, b.jac.len(), b.hess.len()));
+                out.push((name, 1, b.jac.len(), b.hess_slots.len()));
             }
         }
         out
@@ -1324,60 +1326,31 @@ impl HzdProblem {
         Ok(())
     }
 
-    /// A block's contribution Σ_r μ_r ∂²c_r to each of its Hessian pairs, in [`Block::hess`]
-    /// order, into `values` (left alone when its multipliers are all zero). Lane l of one
-    /// evaluation is the `HyperDual64` evaluation of the chunk's pair l.
-    fn block_hessian(
+    /// A block's contribution Σ_r μ_r ∂²c_r to each of its Hessian pairs, in
+    /// [`Block::pairs`] order, into `hess`; with `jac`, also its Jacobian entries
+    /// ([`Block::jac`] order) read off the same passes, over all of [`Block::seeds`] (for an
+    /// active block of a kind that [`Self::shares_jacobian_with_hessian`]). Lane l of one
+    /// evaluation is the `HyperDual64` evaluation of the chunk's seed l: its ε₁ (and ε₂) parts
+    /// are the Jacobian columns of its variables as a `Dual64` sweep gives them, its ε₁ε₂
+    /// part the pair's second derivatives; a Jacobian-only seed has no ε₂ and adds no
+    /// Hessian entry.
+    fn block_hyper_sweep(
         &self,
         x: &[f64],
         multipliers: &[f64],
         blk: &Block,
         work: &mut SweepWork<HyperDual<Lanes<SEED_LANES>>>,
-        values: &mut [f64],
-    ) -> Result<(), DomainError> {
-        if blk.inactive(multipliers) {
-            return Ok(());
-        }
-        let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
-        let SweepWork {
-            scratch, z, out, ..
-        } = work;
-        out.clear();
-        out.resize(blk.n_out, HyperDual::from(0.0));
-        let mut at = 0;
-        for pairs in blk.hess.chunks(SEED_LANES) {
-            seed_hyper_duals(x, &blk.vars, pairs.iter().map(|&(a, b)| (a, Some(b))), z);
-            self.eval_block_in(blk.kind, z, out, scratch)?;
-            for l in 0..pairs.len() {
-                values[at] = out
-                    .iter()
-                    .zip(mu)
-                    .map(|(o, m)| o.eps1eps2.0[l] * m)
-                    .sum::<f64>();
-                at += 1;
-            }
-        }
-        Ok(())
-    }
-
-    /// A block's Jacobian entries (into `jac`, [`Block::jac`] order) and Hessian contribution
-    /// (into `hess`, as [`Self::block_hessian`]) from one sweep over [`Block::seeds`]: lane l
-    /// is the `HyperDual64` evaluation of seed l, whose ε₁ (and ε₂) parts are the Jacobian
-    /// columns of its variables, as a `Dual64` sweep gives them
-    /// ([`Self::shares_jacobian_with_hessian`]). A Jacobian-only seed has no ε₂ and adds no
-    /// Hessian entry. For an active block of a sharing kind.
-    fn block_jacobian_and_hessian(
-        &self,
-        x: &[f64],
-        multipliers: &[f64],
-        blk: &Block,
-        work: &mut SweepWork<HyperDual<Lanes<SEED_LANES>>>,
-        jac: &mut [f64],
         hess: &mut [f64],
+        jac: Option<&mut [f64]>,
     ) -> Result<(), DomainError> {
         let nv = blk.vars.len();
         let mu = &multipliers[blk.row0..blk.row0 + blk.n_out];
-        work.prepare(blk.n_out, nv);
+        let seeds = if jac.is_some() {
+            &blk.seeds[..]
+        } else {
+            blk.pairs()
+        };
+        work.prepare(blk.n_out, if jac.is_some() { nv } else { 0 });
         let SweepWork {
             scratch,
             z,
@@ -1385,14 +1358,16 @@ impl HzdProblem {
             dense,
         } = work;
         let mut at = 0;
-        for seeds in blk.seeds.chunks(SEED_LANES) {
-            seed_hyper_duals(x, &blk.vars, seeds.iter().copied(), z);
+        for chunk in seeds.chunks(SEED_LANES) {
+            seed_hyper_duals(x, &blk.vars, chunk.iter().copied(), z);
             self.eval_block_in(blk.kind, z, out, scratch)?;
-            for (l, &(a, b)) in seeds.iter().enumerate() {
-                for (r, o) in out.iter().enumerate() {
-                    dense[r * nv + a] = o.eps1.0[l];
-                    if let Some(b) = b {
-                        dense[r * nv + b] = o.eps2.0[l];
+            for (l, &(a, b)) in chunk.iter().enumerate() {
+                if jac.is_some() {
+                    for (r, o) in out.iter().enumerate() {
+                        dense[r * nv + a] = o.eps1.0[l];
+                        if let Some(b) = b {
+                            dense[r * nv + b] = o.eps2.0[l];
+                        }
                     }
                 }
                 if b.is_some() {
@@ -1405,10 +1380,33 @@ impl HzdProblem {
                 }
             }
         }
-        for (v, &(r, j)) in jac.iter_mut().zip(&blk.jac) {
-            *v = dense[r * nv + j];
+        if let Some(jac) = jac {
+            for (v, &(r, j)) in jac.iter_mut().zip(&blk.jac) {
+                *v = dense[r * nv + j];
+            }
         }
         Ok(())
+    }
+
+    /// A block's Hessian contribution ([`Self::block_hyper_sweep`] without the Jacobian),
+    /// left alone when its multipliers are all zero.
+    fn block_hessian(
+        &self,
+        x: &[f64],
+        multipliers: &[f64],
+        blk: &Block,
+        work: &mut SweepWork<HyperDual<Lanes<SEED_LANES>>>,
+        values: &mut [f64],
+    ) -> Result<(), DomainError> {
+        if blk.inactive(multipliers) {
+            return Ok(());
+        }
+        self.block_hyper_sweep(x, multipliers, blk, work, values, None)
+    }
+
+    /// Zeroed room for every block's Hessian contribution, in block order.
+    fn hessian_parts(&self) -> Vec<f64> {
+        vec![0.0; self.blocks.iter().map(|b| b.hess_slots.len()).sum()]
     }
 
     /// The Lagrangian Hessian from the blocks' contributions `parts` (each block's run in
@@ -1426,8 +1424,8 @@ impl HzdProblem {
         // sequential loop would, whatever order they were computed in.
         let mut at = 0;
         for blk in &self.blocks {
-            let run = &parts[at..at + blk.hess.len()];
-            at += blk.hess.len();
+            let run = &parts[at..at + blk.hess_slots.len()];
+            at += blk.hess_slots.len();
             // Skipped, not added as zeros: +0.0 would turn a −0.0 entry into +0.0.
             if blk.inactive(multipliers) {
                 continue;
@@ -1556,10 +1554,10 @@ impl NlpProblem for HzdProblem {
         multipliers: &[f64],
         values: &mut [f64],
     ) -> Result<(), DomainError> {
-        let mut parts = vec![0.0; self.blocks.iter().map(|b| b.hess.len()).sum()];
+        let mut parts = self.hessian_parts();
         self.for_each_block(
             &mut parts,
-            |blk| blk.hess.len(),
+            |blk| blk.hess_slots.len(),
             |work, blk, run| self.block_hessian(x, multipliers, blk, work, run),
         )?;
         self.assemble_hessian(x, objective_factor, multipliers, &parts, values);
@@ -1574,21 +1572,21 @@ impl NlpProblem for HzdProblem {
         multipliers: &[f64],
         hessian: &mut [f64],
     ) -> Result<(), DomainError> {
-        let mut parts = vec![0.0; self.blocks.iter().map(|b| b.hess.len()).sum()];
+        let mut parts = self.hessian_parts();
         let runs: Vec<_> = self
             .runs(jacobian, |blk| blk.jac.len())
             .into_iter()
-            .zip(self.runs(&mut parts, |blk| blk.hess.len()))
+            .zip(self.runs(&mut parts, |blk| blk.hess_slots.len()))
             .collect();
         self.for_each_run(
             runs,
             || (SweepWork::new(), SweepWork::new()),
             |(jac_work, hess_work), blk, (jac, hess)| {
-                if blk.seeds.is_empty() || blk.inactive(multipliers) {
+                if Self::shares_jacobian_with_hessian(blk.kind) && !blk.inactive(multipliers) {
+                    self.block_hyper_sweep(x, multipliers, blk, hess_work, hess, Some(jac))
+                } else {
                     self.block_jacobian(x, blk, jac_work, jac)?;
                     self.block_hessian(x, multipliers, blk, hess_work, hess)
-                } else {
-                    self.block_jacobian_and_hessian(x, multipliers, blk, hess_work, jac, hess)
                 }
             },
         )?;

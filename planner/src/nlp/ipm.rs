@@ -527,20 +527,25 @@ impl<'a> Ipm<'a> {
     }
 
     /// ∇f, J and W at (x, y) after an accepted step, J and W from one call of the problem
-    /// (which may share their work): the next iteration's top then finds W current.
+    /// (which may share their work): the next iteration's top then finds W current. If that
+    /// call fails, ∇f and J alone: W is then evaluated at the top, only if the solve goes on
+    /// (a W that cannot be evaluated at the last iterate must not turn a converged solve into
+    /// an evaluation error).
     fn evaluate_derivatives_and_hessian(&mut self) -> std::result::Result<(), DomainError> {
-        let mut grad = std::mem::take(&mut self.grad);
-        let r = self.prob.gradient(&self.x, &mut grad);
-        self.grad = grad;
-        r?;
         let (mut jac, mut hess) = (
             std::mem::take(&mut self.jac),
             std::mem::take(&mut self.hess),
         );
-        let r =
+        let both =
             self.prob
                 .jacobian_and_hessian(&self.x, &self.jac_rows, &self.y, &mut jac, &mut hess);
         (self.jac, self.hess) = (jac, hess);
+        if both.is_err() {
+            return self.evaluate_first_derivatives();
+        }
+        let mut grad = std::mem::take(&mut self.grad);
+        let r = self.prob.gradient(&self.x, &mut grad);
+        self.grad = grad;
         self.hessian_current = r.is_ok();
         r
     }
@@ -1675,7 +1680,8 @@ mod tests {
     use crate::nlp::ad::{AdModel, DenseAdProblem};
     use crate::nlp::test_problems::Hs71;
     use crate::nlp::{
-        solve, solve_with_callback, Backend, IterationControl, SolveOptions, SolveStatus,
+        solve, solve_with_callback, Backend, DomainError, IterationControl, NlpProblem,
+        SolveOptions, SolveStatus, SparsityPattern,
     };
 
     fn native() -> SolveOptions {
@@ -1744,6 +1750,89 @@ mod tests {
         assert_eq!(counts.jacobian, stats.iterations + 2, "{counts:?}");
         assert_eq!(counts.gradient, stats.iterations + 2, "{counts:?}");
         assert_eq!(counts.hessian, stats.iterations + 1, "{counts:?}");
+    }
+
+    /// HS71 whose Hessian cannot be evaluated at the point of its `fail_at`-th call (counting
+    /// from 1), then or at any later call there.
+    struct HessianFailsOnce {
+        inner: DenseAdProblem<Hs71>,
+        calls: std::cell::Cell<usize>,
+        fail_at: usize,
+        failing_x: std::cell::RefCell<Option<Vec<f64>>>,
+    }
+
+    impl NlpProblem for HessianFailsOnce {
+        fn num_variables(&self) -> usize {
+            self.inner.num_variables()
+        }
+        fn num_constraints(&self) -> usize {
+            self.inner.num_constraints()
+        }
+        fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+            self.inner.variable_bounds(lower, upper)
+        }
+        fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+            self.inner.constraint_bounds(lower, upper)
+        }
+        fn initial_point(&self, x0: &mut [f64]) {
+            self.inner.initial_point(x0)
+        }
+        fn objective(&self, x: &[f64]) -> Result<f64, DomainError> {
+            self.inner.objective(x)
+        }
+        fn gradient(&self, x: &[f64], g: &mut [f64]) -> Result<(), DomainError> {
+            self.inner.gradient(x, g)
+        }
+        fn constraints(&self, x: &[f64], g: &mut [f64]) -> Result<(), DomainError> {
+            self.inner.constraints(x, g)
+        }
+        fn jacobian_structure(&self) -> SparsityPattern {
+            self.inner.jacobian_structure()
+        }
+        fn jacobian_values(&self, x: &[f64], v: &mut [f64]) -> Result<(), DomainError> {
+            self.inner.jacobian_values(x, v)
+        }
+        fn hessian_structure(&self) -> SparsityPattern {
+            self.inner.hessian_structure()
+        }
+        fn hessian_values(
+            &self,
+            x: &[f64],
+            sigma: f64,
+            lambda: &[f64],
+            v: &mut [f64],
+        ) -> Result<(), DomainError> {
+            self.calls.set(self.calls.get() + 1);
+            if self.calls.get() == self.fail_at {
+                *self.failing_x.borrow_mut() = Some(x.to_vec());
+            }
+            if self.failing_x.borrow().as_deref() == Some(x) {
+                return Err(DomainError);
+            }
+            self.inner.hessian_values(x, sigma, lambda, v)
+        }
+    }
+
+    /// W is evaluated with J after every accepted step, so also at the last iterate, where
+    /// the solve ends without using it. If it cannot be evaluated there, the solve still
+    /// converges to the same point; if it cannot be evaluated at an iterate that needs it,
+    /// the solve reports an evaluation error.
+    #[test]
+    fn a_hessian_the_solve_does_not_need_cannot_fail_it() {
+        let reference = solve(&DenseAdProblem::new(Hs71::standard()), &native()).unwrap();
+        let last = reference.statistics.evaluation_counts.hessian;
+        let failing = |fail_at| HessianFailsOnce {
+            inner: DenseAdProblem::new(Hs71::standard()),
+            calls: std::cell::Cell::new(0),
+            fail_at,
+            failing_x: std::cell::RefCell::new(None),
+        };
+        let sol = solve(&failing(last), &native()).unwrap();
+        assert_eq!(sol.status, SolveStatus::Optimal);
+        assert_eq!(sol.x, reference.x);
+        assert_eq!(sol.statistics.iterations, reference.statistics.iterations);
+        let sol = solve(&failing(last - 1), &native()).unwrap();
+        assert_eq!(sol.status, SolveStatus::EvaluationError);
     }
 
     #[test]
