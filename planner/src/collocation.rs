@@ -26,6 +26,9 @@
 //!
 //! Cost: the weighted mechanical cost of transport Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with
 //! |u q̇| = p + n, p − n = u q̇, p, n ≥ 0 (slack variables), integrated with Simpson's rule.
+//! The cost stage starts with p and n just off the bound the cost pushes them to
+//! ([`HzdProblem::centre_power_slacks`]). (A smooth √(P² + δ²) − δ instead of the slacks was
+//! measured and not kept: planner/NLP.md, "Eleventh round".)
 //!
 //! # Derivatives
 //! Each constraint group is a *block*: a generic function of a few variables. Jacobians come from
@@ -357,6 +360,8 @@ pub struct HzdProblem {
     design: Option<DesignModel>,
     /// The model's mass properties, body by body, as [`Constant`]s.
     constant_inertias: Vec<BodyInertia<Constant>>,
+    /// The barrier parameter the start point is centred for ([`Self::centre_power_slacks`]).
+    initial_barrier: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -497,6 +502,7 @@ impl HzdProblem {
             initial,
             total_mass_kg,
             constant_inertias,
+            initial_barrier: None,
             design,
         };
         p.build_blocks();
@@ -1107,6 +1113,42 @@ impl HzdProblem {
             * self.layout.intervals as f64
             * self.total_mass_kg
             * self.biped.model.gravity_mps2)
+    }
+
+    /// Moves the start point's power slacks onto the central path of the barrier parameter
+    /// `mu_init` for this problem's cost, and makes `mu_init` the solve's initial barrier
+    /// parameter ([`Self::initial_barrier`]).
+    ///
+    /// The feasibility stage has no cost on the slacks, so its barrier leaves them near the
+    /// middle of their bounds (hundreds of watts where |u q̇| is below one): started there, the
+    /// cost stage began at a cost of transport of ~100 and spent most of its iterations bringing
+    /// them down. Here p = max(u q̇, 0) + δ and n = max(−u q̇, 0) + δ, so p − n = u q̇ still
+    /// holds, with δ = μ₀ / (∂Φ/∂p) the distance from the bound at which the barrier's push
+    /// μ₀/δ equals the cost's pull. Nothing else moves.
+    pub fn centre_power_slacks(&mut self, mu_init: f64) {
+        let l = &self.layout;
+        let (t, d) = (self.initial[l.duration()], self.initial[l.length()]);
+        let pull = self.cost_factor() * t / d;
+        for k in 0..l.points() {
+            for (a, &c) in self.biped.actuators.iter().enumerate() {
+                let power = TORQUE_SCALE * self.initial[l.u(k) + a] * self.initial[l.dq(k) + c];
+                let w = l.simpson_weight(k) * self.config.cost.weights[a];
+                let delta = if pull * w > 0.0 {
+                    mu_init / (pull * w)
+                } else {
+                    1.0
+                };
+                self.initial[l.p(k) + a] = power.max(0.0) + delta;
+                self.initial[l.n(k) + a] = (-power).max(0.0) + delta;
+            }
+        }
+        self.initial_barrier = Some(mu_init);
+    }
+
+    /// The initial barrier parameter the start point is centred for, if any
+    /// ([`Self::centre_power_slacks`]).
+    pub fn initial_barrier(&self) -> Option<f64> {
+        self.initial_barrier
     }
 
     /// The mechanical cost of transport at x (whether or not it is the objective).

@@ -65,7 +65,20 @@ pub struct SolverConfig {
     /// ripopt) or `"ripopt"`.
     #[serde(default)]
     pub backend: SolverBackend,
+    /// Initial barrier parameter μ₀ of the cost-of-transport solve (IPOPT's `mu_init`). That
+    /// solve starts from the feasibility solve's point with its power slacks moved onto the
+    /// central path of μ₀ ([`crate::collocation::HzdProblem::centre_power_slacks`]); a smaller
+    /// μ₀ keeps it closer to that start.
+    #[serde(default = "default_cost_stage_mu_init")]
+    pub cost_stage_mu_init: f64,
 }
+
+fn default_cost_stage_mu_init() -> f64 {
+    DEFAULT_COST_STAGE_MU_INIT
+}
+
+/// The default `[solver] cost_stage_mu_init` (planner/NLP.md, "Eleventh round").
+pub const DEFAULT_COST_STAGE_MU_INIT: f64 = 1e-5;
 
 /// Which NLP backend the planner uses (`[solver] backend`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -166,6 +179,7 @@ impl Default for PlannerConfig {
                 tolerance: 1e-6,
                 max_iterations: 500,
                 backend: SolverBackend::Native,
+                cost_stage_mu_init: DEFAULT_COST_STAGE_MU_INIT,
             },
             codesign: CodesignConfig::default(),
         }
@@ -265,6 +279,7 @@ impl PlannerConfig {
             nonneg(&format!("cost.weights[{i}]"), *w)?;
         }
         positive("solver.tolerance", self.solver.tolerance)?;
+        positive("solver.cost_stage_mu_init", self.solver.cost_stage_mu_init)?;
         let c = &self.codesign;
         let (lo, hi) = (model::design::DESIGN_MIN_M, model::design::DESIGN_MAX_M);
         for (name, [a, b]) in [
@@ -345,6 +360,30 @@ mod tests {
             .expect_err("rejected")
             .to_string();
         assert!(e.contains("surprise"), "{e}");
+    }
+
+    #[test]
+    fn the_cost_stage_mu_init_defaults_to_1e_5_and_must_be_positive() {
+        let text = toml::to_string(&PlannerConfig::default()).expect("serializes");
+        let line = "cost_stage_mu_init = 0.00001";
+        assert!(text.contains(line), "{text}");
+        let without: String = text
+            .lines()
+            .filter(|l| !l.starts_with("cost_stage_mu_init"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let cfg = PlannerConfig::from_toml(&without, "x.toml").expect("parses");
+        assert_eq!(cfg.solver.cost_stage_mu_init, 1e-5);
+        for bad in ["0.0", "-1e-4", "nan"] {
+            let text = text.replace(line, &format!("cost_stage_mu_init = {bad}"));
+            let e = PlannerConfig::from_toml(&text, "x.toml")
+                .expect_err("rejected")
+                .to_string();
+            assert!(
+                e.contains("x.toml") && e.contains("solver.cost_stage_mu_init"),
+                "{e}"
+            );
+        }
     }
 
     #[test]

@@ -1,7 +1,10 @@
 //! The paper's two-step solve (Sec. IV-C) and the gait file it produces.
 //!
 //! Step 1 finds a feasible periodic gait from the hand-built guess with no cost; step 2 starts
-//! from it and minimizes the mechanical cost of transport. Both run sequentially with a fixed
+//! from it and minimizes the mechanical cost of transport. Step 2's start keeps step 1's point
+//! but moves the power slacks, which carried no cost in step 1, onto the central path of
+//! `[solver] cost_stage_mu_init` and starts the barrier there
+//! ([`HzdProblem::centre_power_slacks`]). Both run sequentially with a fixed
 //! probe seed, so the same model and config give the same gait bit for bit.
 
 use crate::biped::PlanarBiped;
@@ -89,8 +92,20 @@ pub fn solve_cost_stage(
     feasible_x: Vec<f64>,
 ) -> Result<Vec<f64>> {
     let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
-    let costed = HzdProblem::new(biped, config.clone(), feasible_x, true)?;
+    let costed = cost_stage_problem(biped, config, feasible_x)?;
     Ok(solve_stage(&costed, "cost of transport", config, &mut |_| {})?.0)
+}
+
+/// The cost-of-transport problem from a feasible point, its power slacks centred for
+/// `[solver] cost_stage_mu_init`.
+fn cost_stage_problem(
+    biped: PlanarBiped,
+    config: &PlannerConfig,
+    feasible_x: Vec<f64>,
+) -> Result<HzdProblem> {
+    let mut costed = HzdProblem::new(biped, config.clone(), feasible_x, true)?;
+    costed.centre_power_slacks(config.solver.cost_stage_mu_init);
+    Ok(costed)
 }
 
 pub(crate) fn solve_stage(
@@ -227,6 +242,10 @@ pub(crate) fn solve_stage_attempt(
         tolerance: config.solver.tolerance,
         constraint_violation_tolerance: 1e-6,
         max_iterations: config.solver.max_iterations,
+        initial_barrier: warm_start
+            .is_none()
+            .then(|| problem.initial_barrier())
+            .flatten(),
         warm_start,
         backend,
         ..SolveOptions::default()
@@ -414,7 +433,7 @@ pub fn plan_gait(
     let Some((x1, r1)) = found else {
         return Err(last_error.unwrap_or_else(|| PlannerError::Solver("no start".into())));
     };
-    let costed = HzdProblem::new(biped, config.clone(), x1.clone(), true)?;
+    let costed = cost_stage_problem(biped, config, x1.clone())?;
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
     let mut gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
     // The runtime's feed-forward: the torques along the closed-loop orbit (finer and more

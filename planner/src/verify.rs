@@ -225,7 +225,7 @@ impl ClosedLoop {
         let mut table = Vec::new();
         let mut t = 0.0;
         while t < 5.0 {
-            let (_, u) = self.field(&x)?;
+            let (f, u) = self.field(&x)?;
             let (tau, _) = self.phase(&x[..nq], &x[nq..])?;
             let by_output: Vec<f64> = self
                 .biped
@@ -245,7 +245,7 @@ impl ClosedLoop {
             {
                 table.push((tau, by_output));
             }
-            let next = self.rk4(&x, dt)?;
+            let next = self.rk4_from(&x, &f, dt)?;
             if t > 0.1 && self.swing_foot(&next)?[1] < 0.0 {
                 break;
             }
@@ -398,11 +398,16 @@ impl ClosedLoop {
     }
 
     fn rk4(&self, x: &[f64], h: f64) -> Result<Vec<f64>> {
+        let k1 = self.field(x)?.0;
+        self.rk4_from(x, &k1, h)
+    }
+
+    /// [`Self::rk4`] with its first stage `k1` = f(x) already evaluated.
+    fn rk4_from(&self, x: &[f64], k1: &[f64], h: f64) -> Result<Vec<f64>> {
         let add = |a: &[f64], k: &[f64], s: f64| -> Vec<f64> {
             a.iter().zip(k).map(|(p, q)| p + s * q).collect()
         };
-        let k1 = self.field(x)?.0;
-        let k2 = self.field(&add(x, &k1, h / 2.0))?.0;
+        let k2 = self.field(&add(x, k1, h / 2.0))?.0;
         let k3 = self.field(&add(x, &k2, h / 2.0))?.0;
         let k4 = self.field(&add(x, &k3, h))?.0;
         Ok((0..x.len())

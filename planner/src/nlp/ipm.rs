@@ -496,6 +496,9 @@ impl<'a> Ipm<'a> {
                 };
             }
             None => {
+                if let Some(mu) = self.options.initial_barrier {
+                    self.mu = mu;
+                }
                 self.least_squares_multipliers();
             }
         }

@@ -228,6 +228,9 @@ fn ripopt_options(problem: &dyn NlpProblem, options: &SolveOptions) -> ripopt::S
         detect_linear_constraints: false,
         ..ripopt::SolverOptions::default()
     };
+    if let (Some(mu), None) = (options.initial_barrier, &options.warm_start) {
+        out.mu_init = mu;
+    }
     if let Some(start) = &options.warm_start {
         out.warm_start = true;
         // IPOPT's advice for warm starts: push the start only slightly off the bounds.

@@ -204,6 +204,10 @@ pub struct SolveOptions {
     pub print_level: u8,
     /// Start from these multipliers (and point); `None` for a cold start.
     pub warm_start: Option<WarmStart>,
+    /// Initial barrier parameter μ₀ of a solve without `warm_start` (IPOPT's `mu_init`);
+    /// `None`: 0.1. For a start point already near the central path of a small μ (a warm
+    /// start's multipliers set μ₀ from their complementarity instead).
+    pub initial_barrier: Option<f64>,
 }
 
 impl Default for SolveOptions {
@@ -216,6 +220,7 @@ impl Default for SolveOptions {
             max_wall_time: None,
             print_level: 0,
             warm_start: None,
+            initial_barrier: None,
         }
     }
 }
@@ -333,6 +338,15 @@ fn validate_options(options: &SolveOptions) -> Result<()> {
         if !(value.is_finite() && value > 0.0) {
             return Err(NlpError::InvalidOption {
                 name,
+                value,
+                reason: "must be finite and positive",
+            });
+        }
+    }
+    if let Some(value) = options.initial_barrier {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(NlpError::InvalidOption {
+                name: "initial_barrier",
                 value,
                 reason: "must be finite and positive",
             });
@@ -492,5 +506,58 @@ mod tests {
                 ..
             })
         ));
+        for value in [0.0, -1e-3, f64::NAN] {
+            let bad_barrier = SolveOptions {
+                initial_barrier: Some(value),
+                ..SolveOptions::default()
+            };
+            assert!(matches!(
+                solve(&hs71(), &bad_barrier),
+                Err(NlpError::InvalidOption {
+                    name: "initial_barrier",
+                    ..
+                })
+            ));
+        }
+    }
+
+    /// `initial_barrier` is the first iterate's μ on a cold start, with either backend; the
+    /// default is IPOPT's 0.1; a warm start's multipliers set μ instead.
+    #[test]
+    fn initial_barrier_sets_the_cold_start_mu() {
+        for backend in [Backend::Native, Backend::Ripopt] {
+            let first_mu = |options: SolveOptions| {
+                let mut mu = Vec::new();
+                solve_with_callback(&hs71(), &options, &mut |r| {
+                    mu.push(r.barrier_parameter);
+                    IterationControl::Continue
+                })
+                .unwrap();
+                mu[0]
+            };
+            let base = SolveOptions {
+                backend,
+                ..SolveOptions::default()
+            };
+            assert_eq!(first_mu(base.clone()), 0.1, "{backend:?}");
+            let small = SolveOptions {
+                initial_barrier: Some(1e-3),
+                ..base.clone()
+            };
+            assert_eq!(first_mu(small), 1e-3, "{backend:?}");
+        }
+        let cold = solve(&hs71(), &SolveOptions::default()).unwrap();
+        let warm = SolveOptions {
+            warm_start: Some(cold.warm_start()),
+            initial_barrier: Some(0.05),
+            ..SolveOptions::default()
+        };
+        let mut mu = Vec::new();
+        solve_with_callback(&hs71(), &warm, &mut |r| {
+            mu.push(r.barrier_parameter);
+            IterationControl::Continue
+        })
+        .unwrap();
+        assert!(mu[0] < 1e-3, "{mu:?}");
     }
 }
