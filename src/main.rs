@@ -851,8 +851,12 @@ fn plan(
     }
     planned.gait.save(out)?;
     let g = &planned.gait;
+    let feasibility = planned
+        .feasibility_size
+        .map(|(n, m)| format!(" (feasibility stage: {n} and {m}, no power slacks)"))
+        .unwrap_or_default();
     println!(
-        "\nNLP: {} variables, {} constraints, set-up {:.3} s",
+        "\nNLP: {} variables, {} constraints{feasibility}, set-up {:.3} s",
         planned.size.0, planned.size.1, planned.setup_time_s
     );
     println!(

@@ -435,13 +435,13 @@ fn bench_check_reports_identical_verifications() {
 }
 
 /// `--backend native` reaches the planner: one benchmark plan with the native interior point
-/// (49 + 28 iterations on ADAM), and an unknown backend is refused with the choices.
+/// (39 + 28 iterations on ADAM), and an unknown backend is refused with the choices.
 #[test]
 fn bench_plan_runs_the_native_backend_and_rejects_unknown_ones() {
     let (ok, out, err) = adam(&["bench", "plan", "--runs", "1", "--backend", "native"]);
     assert!(ok, "{err}");
     assert!(out.contains("Native backend: median"), "{out}");
-    // The iteration count printed after the median: 77 here; ripopt takes 70.
+    // The iteration count printed after the median: 67 here; ripopt takes 85.
     let iterations: usize = out
         .split(" s and ")
         .nth(1)

@@ -283,6 +283,7 @@ fn codesign_run(
         x: xf,
         feasible_x: Vec::new(),
         size,
+        feasibility_size: None,
         setup_time_s: 0.0,
     };
     Ok(CodesignResult {

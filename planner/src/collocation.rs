@@ -4,7 +4,8 @@
 //! # Transcription
 //! N intervals, 2N + 1 points k (even k: nodes, odd k: midpoints), step duration T a variable and
 //! h = T/N. At every point: reduced state q_r, q̇_r, q̈_r (pinned stance, see [`crate::biped`]),
-//! torques u and the positive/negative parts p, n of each actuator's power. Global variables: the
+//! torques u and, in the cost-of-transport problem, the positive/negative parts p, n of each
+//! actuator's power (the feasibility problem has no cost and no power slacks). Global variables: the
 //! Bézier coefficients α (m × (b+1)), θ⁺ and θ⁻ of the phase variable, T, and the step length d.
 //!
 //! Constraints (all from [`crate::config::PlannerConfig`]):
@@ -26,8 +27,8 @@
 //!
 //! Cost: the weighted mechanical cost of transport Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with
 //! |u q̇| = p + n, p − n = u q̇, p, n ≥ 0 (slack variables), integrated with Simpson's rule.
-//! The cost stage starts with p and n just off the bound the cost pushes them to
-//! ([`HzdProblem::centre_power_slacks`]). (A smooth √(P² + δ²) − δ instead of the slacks was
+//! The cost stage creates p and n from the feasible point's u q̇, just off the bound the cost
+//! pushes them to ([`Layout::with_slacks`], [`HzdProblem::centre_power_slacks`]). (A smooth √(P² + δ²) − δ instead of the slacks was
 //! measured and not kept: planner/NLP.md, "Eleventh round".)
 //!
 //! # Derivatives
@@ -174,6 +175,9 @@ pub struct Layout {
     pub stride: usize,
     /// Design variables (0, or 2 in a co-design: thigh and shin length, m).
     pub design: usize,
+    /// Whether each point has the power slacks p, n (the cost-of-transport problem does; the
+    /// feasibility problem, which has no cost on them, does not).
+    pub slacks: bool,
 }
 
 impl Layout {
@@ -208,7 +212,31 @@ impl Layout {
     /// Index of the phase τ at point k (followed by τ̇ and τ̈): lifted variables, so that the
     /// costly stance-leg kinematics is differentiated once per point, not once per output.
     pub fn tau(&self, k: usize) -> usize {
-        k * self.stride + 3 * self.nq + 3 * self.nu
+        k * self.stride + self.stride - 3
+    }
+    /// Number of variables of the same problem without power slacks (the feasibility layout).
+    pub fn len_without_slacks(&self) -> usize {
+        if self.slacks {
+            self.len() - 2 * self.nu * self.points()
+        } else {
+            self.len()
+        }
+    }
+
+    /// A point of the layout without power slacks (`x`, [`Self::len_without_slacks`] long)
+    /// in this one, with p = n = 0 (see [`HzdProblem::centre_power_slacks`]).
+    pub fn with_slacks(&self, x: &[f64]) -> Vec<f64> {
+        debug_assert!(self.slacks && x.len() == self.len_without_slacks());
+        let short = self.stride - 2 * self.nu;
+        let mut out = vec![0.0; self.len()];
+        for k in 0..self.points() {
+            let (a, b) = (k * short, k * self.stride);
+            out[b..b + 3 * self.nq + self.nu].copy_from_slice(&x[a..a + 3 * self.nq + self.nu]);
+            out[b + self.stride - 3..b + self.stride].copy_from_slice(&x[a + short - 3..a + short]);
+        }
+        let (ga, gb) = (self.points() * short, self.points() * self.stride);
+        out[gb..].copy_from_slice(&x[ga..]);
+        out
     }
     fn globals(&self) -> usize {
         self.points() * self.stride
@@ -436,6 +464,8 @@ impl HzdProblem {
         with_cost: bool,
         codesign: Option<Codesign>,
     ) -> crate::Result<Self> {
+        // The power slacks only serve the cost: the feasibility problem has none.
+        let slacks = with_cost;
         let design = match codesign {
             None => None,
             Some(spec) => {
@@ -473,8 +503,9 @@ impl HzdProblem {
             m: biped.outputs.len(),
             degree: config.collocation.bezier_degree,
             intervals: config.collocation.intervals,
-            stride: 3 * biped.nq() + 3 * biped.nu() + 3,
+            stride: 3 * biped.nq() + if slacks { 3 } else { 1 } * biped.nu() + 3,
             design: if design.is_some() { 2 } else { 0 },
+            slacks,
         };
         if config.cost.weights.len() != layout.nu {
             return Err(crate::PlannerError::InvalidField {
@@ -576,7 +607,7 @@ impl HzdProblem {
                 self.add(Kind::OutputDynamics(o), vars, &[0.0], &[0.0]);
             }
             // Power slacks.
-            for a in 0..nu {
+            for a in (0..nu).filter(|_| l.slacks) {
                 let c = self.biped.actuators[a];
                 let vars = vec![l.p(k) + a, l.n(k) + a, l.u(k) + a, l.dq(k) + c];
                 self.add(Kind::Power(c), vars, &[0.0], &[0.0]);
@@ -659,7 +690,7 @@ impl HzdProblem {
         }
         // Cost weights of the slack variables.
         for k in 0..l.points() {
-            for a in 0..nu {
+            for a in (0..nu).filter(|_| l.slacks) {
                 let w = l.simpson_weight(k) * self.config.cost.weights[a];
                 self.slack_weights.push((l.p(k) + a, w));
                 self.slack_weights.push((l.n(k) + a, w));
@@ -1119,12 +1150,13 @@ impl HzdProblem {
     /// `mu_init` for this problem's cost, and makes `mu_init` the solve's initial barrier
     /// parameter ([`Self::initial_barrier`]).
     ///
-    /// The feasibility stage has no cost on the slacks, so its barrier leaves them near the
-    /// middle of their bounds (hundreds of watts where |u q̇| is below one): started there, the
+    /// p = max(u q̇, 0) + δ and n = max(−u q̇, 0) + δ, so p − n = u q̇ holds, with
+    /// δ = μ₀ / (∂Φ/∂p) the distance from the bound at which the barrier's push μ₀/δ equals the
+    /// cost's pull (1 W where an actuator's weight is zero). Nothing else moves. (When the
+    /// feasibility problem still had the slacks, with no cost on them, its barrier left them near
+    /// the middle of their bounds, hundreds of watts where |u q̇| is below one: started there, the
     /// cost stage began at a cost of transport of ~100 and spent most of its iterations bringing
-    /// them down. Here p = max(u q̇, 0) + δ and n = max(−u q̇, 0) + δ, so p − n = u q̇ still
-    /// holds, with δ = μ₀ / (∂Φ/∂p) the distance from the bound at which the barrier's push
-    /// μ₀/δ equals the cost's pull. Nothing else moves.
+    /// them down.)
     pub fn centre_power_slacks(&mut self, mu_init: f64) {
         let l = &self.layout;
         let (t, d) = (self.initial[l.duration()], self.initial[l.length()]);
@@ -1143,6 +1175,13 @@ impl HzdProblem {
             }
         }
         self.initial_barrier = Some(mu_init);
+    }
+
+    /// Replaces the start point (`x`, [`Layout::len`] long).
+    pub fn set_initial(&mut self, x: Vec<f64>) {
+        debug_assert_eq!(x.len(), self.layout.len());
+        self.initial = x;
+        self.initial_barrier = None;
     }
 
     /// The initial barrier parameter the start point is centred for, if any
@@ -1212,10 +1251,12 @@ impl HzdProblem {
                 let effort = joint_of(c).map(|j| j.effort_limit).unwrap_or(0.0);
                 lo[l.u(k) + a] = -effort / TORQUE_SCALE;
                 hi[l.u(k) + a] = effort / TORQUE_SCALE;
-                lo[l.p(k) + a] = 0.0;
-                hi[l.p(k) + a] = p_max;
-                lo[l.n(k) + a] = 0.0;
-                hi[l.n(k) + a] = p_max;
+                if l.slacks {
+                    lo[l.p(k) + a] = 0.0;
+                    hi[l.p(k) + a] = p_max;
+                    lo[l.n(k) + a] = 0.0;
+                    hi[l.n(k) + a] = p_max;
+                }
             }
         }
         for o in 0..l.m {

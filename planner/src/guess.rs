@@ -104,9 +104,11 @@ pub fn initial_guess(
                 .map_or(0.0, |j| j.effort_limit);
             let u = u.clamp(-0.9 * limit, 0.9 * limit);
             x[layout.u(k) + a] = u / TORQUE_SCALE;
-            let power = u * dq_now[i];
-            x[layout.p(k) + a] = power.max(0.0) + 0.1;
-            x[layout.n(k) + a] = (-power).max(0.0) + 0.1;
+            if layout.slacks {
+                let power = u * dq_now[i];
+                x[layout.p(k) + a] = power.max(0.0) + 0.1;
+                x[layout.n(k) + a] = (-power).max(0.0) + 0.1;
+            }
         }
         let d = bp
             .model

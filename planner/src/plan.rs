@@ -63,10 +63,13 @@ pub struct PlannedGait {
     pub stages: Vec<StageReport>,
     /// The final NLP point.
     pub x: Vec<f64>,
-    /// The feasibility stage's point (the start of the cost-of-transport solve).
+    /// The feasibility stage's point (the start of the cost-of-transport solve; no power
+    /// slacks, see [`cost_stage_problem`]).
     pub feasible_x: Vec<f64>,
-    /// Variables and constraints of the NLP.
+    /// Variables and constraints of the cost-of-transport NLP.
     pub size: (usize, usize),
+    /// Variables and constraints of the feasibility NLP (no power slacks), if one was solved.
+    pub feasibility_size: Option<(usize, usize)>,
     /// Set-up time (problem construction, sparsity detection), s.
     pub setup_time_s: f64,
 }
@@ -89,21 +92,29 @@ pub const FEASIBILITY_MAX_ITERATIONS: usize = 150;
 pub fn solve_cost_stage(
     model: &PlanarModel,
     config: &PlannerConfig,
-    feasible_x: Vec<f64>,
+    feasible_x: &[f64],
 ) -> Result<Vec<f64>> {
     let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
     let costed = cost_stage_problem(biped, config, feasible_x)?;
     Ok(solve_stage(&costed, "cost of transport", config, &mut |_| {})?.0)
 }
 
-/// The cost-of-transport problem from a feasible point, its power slacks centred for
-/// `[solver] cost_stage_mu_init`.
-fn cost_stage_problem(
+/// The cost-of-transport problem from a point of the feasibility problem (no power slacks),
+/// with the power slacks made from its u q̇ and centred for `[solver] cost_stage_mu_init`.
+pub fn cost_stage_problem(
     biped: PlanarBiped,
     config: &PlannerConfig,
-    feasible_x: Vec<f64>,
+    feasible_x: &[f64],
 ) -> Result<HzdProblem> {
-    let mut costed = HzdProblem::new(biped, config.clone(), feasible_x, true)?;
+    let mut costed = HzdProblem::new(biped, config.clone(), Vec::new(), true)?;
+    let expected = costed.layout.len_without_slacks();
+    if feasible_x.len() != expected {
+        return Err(PlannerError::Solver(format!(
+            "the cost stage's start has {} variables; the feasibility problem has {expected}",
+            feasible_x.len()
+        )));
+    }
+    costed.set_initial(costed.layout.with_slacks(feasible_x));
     costed.centre_power_slacks(config.solver.cost_stage_mu_init);
     Ok(costed)
 }
@@ -375,7 +386,7 @@ pub fn plan_gait(
     let [d_lo, d_hi] = config.gait.step_duration_s;
     let probe = HzdProblem::new(biped.clone(), config.clone(), Vec::new(), false)?;
     let setup_time_s = setup.elapsed().as_secs_f64();
-    let size = (
+    let feasibility_size = (
         nlp::NlpProblem::num_variables(&probe),
         nlp::NlpProblem::num_constraints(&probe),
     );
@@ -433,7 +444,11 @@ pub fn plan_gait(
     let Some((x1, r1)) = found else {
         return Err(last_error.unwrap_or_else(|| PlannerError::Solver("no start".into())));
     };
-    let costed = cost_stage_problem(biped, config, x1.clone())?;
+    let costed = cost_stage_problem(biped, config, &x1)?;
+    let size = (
+        nlp::NlpProblem::num_variables(&costed),
+        nlp::NlpProblem::num_constraints(&costed),
+    );
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
     let mut gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
     // The runtime's feed-forward: the torques along the closed-loop orbit (finer and more
@@ -449,6 +464,7 @@ pub fn plan_gait(
         x,
         feasible_x: x1,
         size,
+        feasibility_size: Some(feasibility_size),
         setup_time_s,
     })
 }

@@ -1,5 +1,7 @@
 //! End to end: plan ADAM's gait with the shipped config, and check the problem's derivatives.
 
+mod common;
+
 use planner::biped::PlanarBiped;
 use planner::collocation::HzdProblem;
 use planner::config::PlannerConfig;
@@ -80,17 +82,18 @@ fn plans_a_feasible_gait_inside_table_one_deterministically() {
     g.validate("planned").expect("valid gait file");
     // Same start, same gait, bit for bit (the cost stage again from the same feasible point;
     // re-running the ~2-minute feasibility stage as well would double the test's time).
-    let again =
-        planner::plan::solve_cost_stage(&model, &config, a.feasible_x.clone()).expect("re-solves");
+    let again = planner::plan::solve_cost_stage(&model, &config, &a.feasible_x).expect("re-solves");
     assert_eq!(a.x, again);
 }
 
-/// The cost stage starts from the feasibility solution with its power slacks on the central
-/// path of `[solver] cost_stage_mu_init`: p − n = u q̇ still holds, the smaller of p and n is
-/// μ₀ / (∂Φ/∂p) off its bound (∂Φ/∂p from the problem's own gradient), and nothing else moves.
-/// From there the cost stage needs fewer than half the iterations it needs from the uncentred
-/// point with IPOPT's default μ₀ = 0.1 (28 against 74 when this was written), to an optimum at
-/// least as cheap.
+/// The cost stage starts from the feasibility solution (which has no power slacks) with the
+/// slacks made from its u q̇ and put on the central path of `[solver] cost_stage_mu_init`:
+/// p − n = u q̇, the smaller of p and n is μ₀ / (∂Φ/∂p) off its bound (∂Φ/∂p from the
+/// problem's own gradient), and every other variable is the feasible point's. From there the
+/// cost stage needs fewer than half the iterations it needs from the slacks in the middle of
+/// their bounds with IPOPT's μ₀ = 0.1, where the feasibility stage used to leave them (28
+/// against 84 when this was written), to an optimum at least as cheap. A start of the wrong
+/// length is refused with both lengths.
 #[test]
 fn the_cost_stage_starts_with_its_power_slacks_centred() {
     use planner::nlp::{solve, SolveOptions};
@@ -98,10 +101,8 @@ fn the_cost_stage_starts_with_its_power_slacks_centred() {
     let a = plan_gait(&model, "u", &text, &config, &mut |_| {}).expect("plans");
     let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
     let x1 = a.feasible_x.clone();
-    let mut centred =
-        HzdProblem::new(bp.clone(), config.clone(), x1.clone(), true).expect("problem");
+    let centred = planner::plan::cost_stage_problem(bp.clone(), &config, &x1).expect("problem");
     let mu = config.solver.cost_stage_mu_init;
-    centred.centre_power_slacks(mu);
     assert_eq!(centred.initial_barrier(), Some(mu));
     let n = centred.num_variables();
     let mut x = vec![0.0; n];
@@ -109,12 +110,14 @@ fn the_cost_stage_starts_with_its_power_slacks_centred() {
     let mut gradient = vec![0.0; n];
     centred.gradient(&x, &mut gradient).expect("gradient");
     let l = centred.layout.clone();
-    let mut moved = vec![false; n];
+    assert_eq!(x1.len(), l.len_without_slacks());
+    let lifted = l.with_slacks(&x1);
+    let mut slack = vec![false; n];
     for k in 0..l.points() {
         for (i, &c) in bp.actuators.iter().enumerate() {
             let (p, m) = (l.p(k) + i, l.n(k) + i);
-            moved[p] = true;
-            moved[m] = true;
+            slack[p] = true;
+            slack[m] = true;
             let power = planner::collocation::TORQUE_SCALE * x[l.u(k) + i] * x[l.dq(k) + c];
             assert!(
                 (x[p] - x[m] - power).abs() <= 1e-12 * power.abs().max(1.0),
@@ -130,16 +133,34 @@ fn the_cost_stage_starts_with_its_power_slacks_centred() {
             );
         }
     }
-    for i in (0..n).filter(|&i| !moved[i]) {
-        assert_eq!(x[i].to_bits(), x1[i].to_bits(), "variable {i} moved");
+    for i in (0..n).filter(|&i| !slack[i]) {
+        assert_eq!(x[i].to_bits(), lifted[i].to_bits(), "variable {i} moved");
     }
+    // Every variable of the feasible point is in the lifted one, once.
+    let mut kept: Vec<u64> = (0..n)
+        .filter(|&i| !slack[i])
+        .map(|i| x[i].to_bits())
+        .collect();
+    let mut given: Vec<u64> = x1.iter().map(|v| v.to_bits()).collect();
+    kept.sort_unstable();
+    given.sort_unstable();
+    assert_eq!(kept, given);
+    let e = planner::plan::cost_stage_problem(bp.clone(), &config, &x)
+        .err()
+        .expect("a point with slacks is refused")
+        .to_string();
+    assert!(
+        e.contains(&n.to_string()) && e.contains(&x1.len().to_string()),
+        "{e}"
+    );
+
     let options = SolveOptions {
         tolerance: config.solver.tolerance,
         constraint_violation_tolerance: 1e-6,
         ..SolveOptions::default()
     };
-    let uncentred = HzdProblem::new(bp, config.clone(), x1, true).expect("problem");
-    let from_feasible = solve(&uncentred, &options).expect("solves");
+    let midrange = common::midrange_slack_start(&bp, &config, &x1);
+    let from_midrange = solve(&midrange, &options).expect("solves");
     let from_centred = solve(
         &centred,
         &SolveOptions {
@@ -148,12 +169,12 @@ fn the_cost_stage_starts_with_its_power_slacks_centred() {
         },
     )
     .expect("solves");
-    let (c, u) = (&from_centred.statistics, &from_feasible.statistics);
+    let (c, u) = (&from_centred.statistics, &from_midrange.statistics);
     println!(
-        "centred: {} iterations, CoT {:.6}; uncentred: {} iterations, CoT {:.6}",
+        "centred: {} iterations, CoT {:.6}; mid-range slacks: {} iterations, CoT {:.6}",
         c.iterations, c.objective, u.iterations, u.objective
     );
-    assert!(from_centred.status.is_success() && from_feasible.status.is_success());
+    assert!(from_centred.status.is_success() && from_midrange.status.is_success());
     assert!(2 * c.iterations < u.iterations, "{c:?} vs {u:?}");
     assert!(c.objective <= u.objective * (1.0 + 1e-6), "{c:?} vs {u:?}");
     assert_eq!(a.x, from_centred.x, "the plan's cost stage is this solve");
@@ -283,23 +304,24 @@ fn derivatives_are_bit_identical_in_parallel_and_sequentially() {
     assert_eq!(parallel, sequential);
 }
 
-/// With step durations of 0.6–0.7 s ripopt's first feasibility start falls into its
-/// restoration phase (about a thousand nested iterations and 58 s before the guard). A start
-/// that needs restoration is dropped for the next one, so the whole feasibility stage stays
-/// within one start's iteration cap, counting every iteration the solver reports (restoration
-/// included), and the gait still satisfies Table I's shorter durations. (The scenario is
-/// ripopt's: the native backend, the default, solves the first start in 45 iterations.)
+/// With step durations of 0.8–0.9 s ripopt's first two feasibility starts fall into its
+/// restoration phase (with 0.6–0.7 s, before the feasibility problem lost its power slacks, the
+/// first did: about a thousand nested iterations and 58 s before the guard). A start that needs
+/// restoration is dropped for the next one, so the whole feasibility stage stays within one
+/// start's iteration cap, counting every iteration the solver reports (restoration included),
+/// and the gait still satisfies the config's durations. (The scenario is ripopt's: the native
+/// backend, the default, solves the first start.)
 #[test]
 fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     use planner::plan::{Progress, FEASIBILITY_MAX_ITERATIONS};
     let (model, text, mut config) = setup();
-    config.gait.step_duration_s = [0.6, 0.7];
+    config.gait.step_duration_s = [0.8, 0.9];
     config.solver.backend = planner::config::SolverBackend::Ripopt;
     let (mut starts, mut iterations) = (0, 0);
     let mut per_start: Vec<usize> = Vec::new();
     let mut in_feasibility = false;
-    // Whether a start reported a second iteration 0 (its nested restoration solve).
-    let (mut zeros, mut restored) = (0, false);
+    // Whether each start reported a second iteration 0 (its nested restoration solve).
+    let (mut zeros, mut restored) = (0, Vec::new());
     let gait = plan_gait(
         &model,
         "../robots/adam_planar.urdf",
@@ -311,14 +333,19 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
                 starts += usize::from(in_feasibility);
                 if in_feasibility {
                     per_start.push(0);
-                    zeros = 0;
+                    restored.push(false);
                 }
+                zeros = 0;
             }
             Progress::Iteration(_, r) => {
                 let counted = usize::from(in_feasibility && r.iteration > 0);
                 iterations += counted;
                 zeros += usize::from(r.iteration == 0);
-                restored |= zeros > 1;
+                if in_feasibility && zeros > 1 {
+                    if let Some(last) = restored.last_mut() {
+                        *last = true;
+                    }
+                }
                 if let Some(n) = per_start.last_mut() {
                     *n += counted;
                 }
@@ -327,15 +354,18 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     )
     .expect("plans");
     let feasibility = &gait.stages[0];
-    println!("{starts} starts ({per_start:?} iterations), stage: {feasibility:?}");
-    assert_eq!(starts, 2, "the first start is dropped, the second succeeds");
+    println!(
+        "{starts} starts ({per_start:?} iterations, restored {restored:?}), stage: {feasibility:?}"
+    );
+    assert!(starts >= 2, "a start is dropped, a later one succeeds");
     assert!(iterations < FEASIBILITY_MAX_ITERATIONS, "{iterations}");
     // The stage's report counts the dropped start's iterations too, every one of them.
     assert_eq!(feasibility.iterations, iterations);
-    // The dropped start did enter restoration (that is why it was dropped).
-    assert!(restored);
+    // The dropped starts did enter restoration (that is why they were dropped); the last did not.
+    assert!(restored[..starts - 1].iter().all(|&r| r), "{restored:?}");
+    assert!(!restored[starts - 1], "{restored:?}");
     let d = gait.gait.step_duration_s;
-    assert!((0.6 - 1e-6..=0.7 + 1e-6).contains(&d), "{d}");
+    assert!((0.8 - 1e-6..=0.9 + 1e-6).contains(&d), "{d}");
 }
 
 /// A config no robot can walk (0.9 m of swing-foot clearance on 0.7 m legs) fails every start
