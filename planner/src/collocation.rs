@@ -28,8 +28,9 @@
 //! Cost: the weighted mechanical cost of transport Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with
 //! |u q̇| = p + n, p − n = u q̇, p, n ≥ 0 (slack variables), integrated with Simpson's rule.
 //! The cost stage creates p and n from the feasible point's u q̇, just off the bound the cost
-//! pushes them to ([`Layout::with_slacks`], [`HzdProblem::centre_power_slacks`]). (A smooth √(P² + δ²) − δ instead of the slacks was
-//! measured and not kept: planner/NLP.md, "Eleventh round".)
+//! pushes them to ([`Layout::with_slacks`], [`HzdProblem::centre_power_slacks`]). (A smooth
+//! √(P² + δ²) − δ instead of the slacks was measured and not kept: planner/NLP.md, "Eleventh
+//! round".)
 //!
 //! # Derivatives
 //! Each constraint group is a *block*: a generic function of a few variables. Jacobians come from
@@ -224,9 +225,21 @@ impl Layout {
     }
 
     /// A point of the layout without power slacks (`x`, [`Self::len_without_slacks`] long)
-    /// in this one, with p = n = 0 (see [`HzdProblem::centre_power_slacks`]).
-    pub fn with_slacks(&self, x: &[f64]) -> Vec<f64> {
-        debug_assert!(self.slacks && x.len() == self.len_without_slacks());
+    /// in this one, with p = n = 0 (see [`HzdProblem::centre_power_slacks`]). An `x` of
+    /// another length (or a layout without slacks) is an error naming both lengths.
+    pub fn with_slacks(&self, x: &[f64]) -> crate::Result<Vec<f64>> {
+        let expected = self.len_without_slacks();
+        if !self.slacks || x.len() != expected {
+            return Err(crate::PlannerError::Solver(format!(
+                "a point without power slacks has {expected} variables here, this one {}{}",
+                x.len(),
+                if self.slacks {
+                    ""
+                } else {
+                    " (and this layout has no slacks to add)"
+                }
+            )));
+        }
         let short = self.stride - 2 * self.nu;
         let mut out = vec![0.0; self.len()];
         for k in 0..self.points() {
@@ -236,7 +249,7 @@ impl Layout {
         }
         let (ga, gb) = (self.points() * short, self.points() * self.stride);
         out[gb..].copy_from_slice(&x[ga..]);
-        out
+        Ok(out)
     }
     fn globals(&self) -> usize {
         self.points() * self.stride
@@ -1152,7 +1165,8 @@ impl HzdProblem {
     ///
     /// p = max(u q̇, 0) + δ and n = max(−u q̇, 0) + δ, so p − n = u q̇ holds, with
     /// δ = μ₀ / (∂Φ/∂p) the distance from the bound at which the barrier's push μ₀/δ equals the
-    /// cost's pull (1 W where an actuator's weight is zero). Nothing else moves. (When the
+    /// cost's pull (1 W where an actuator's weight is zero; the solver's bound push keeps a p or n
+    /// that ends above its bound inside). Nothing else moves. (When the
     /// feasibility problem still had the slacks, with no cost on them, its barrier left them near
     /// the middle of their bounds, hundreds of watts where |u q̇| is below one: started there, the
     /// cost stage began at a cost of transport of ~100 and spent most of its iterations bringing

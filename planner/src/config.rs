@@ -66,9 +66,9 @@ pub struct SolverConfig {
     #[serde(default)]
     pub backend: SolverBackend,
     /// Initial barrier parameter μ₀ of the cost-of-transport solve (IPOPT's `mu_init`). That
-    /// solve starts from the feasibility solve's point with its power slacks moved onto the
-    /// central path of μ₀ ([`crate::collocation::HzdProblem::centre_power_slacks`]); a smaller
-    /// μ₀ keeps it closer to that start.
+    /// solve starts from the feasibility solve's point, with power slacks made from its u q̇ on
+    /// the central path of μ₀ ([`crate::collocation::HzdProblem::centre_power_slacks`]); a
+    /// smaller μ₀ keeps it closer to that start.
     #[serde(default = "default_cost_stage_mu_init")]
     pub cost_stage_mu_init: f64,
 }

@@ -107,14 +107,7 @@ pub fn cost_stage_problem(
     feasible_x: &[f64],
 ) -> Result<HzdProblem> {
     let mut costed = HzdProblem::new(biped, config.clone(), Vec::new(), true)?;
-    let expected = costed.layout.len_without_slacks();
-    if feasible_x.len() != expected {
-        return Err(PlannerError::Solver(format!(
-            "the cost stage's start has {} variables; the feasibility problem has {expected}",
-            feasible_x.len()
-        )));
-    }
-    costed.set_initial(costed.layout.with_slacks(feasible_x));
+    costed.set_initial(costed.layout.with_slacks(feasible_x)?);
     costed.centre_power_slacks(config.solver.cost_stage_mu_init);
     Ok(costed)
 }

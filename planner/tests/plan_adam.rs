@@ -111,7 +111,7 @@ fn the_cost_stage_starts_with_its_power_slacks_centred() {
     centred.gradient(&x, &mut gradient).expect("gradient");
     let l = centred.layout.clone();
     assert_eq!(x1.len(), l.len_without_slacks());
-    let lifted = l.with_slacks(&x1);
+    let lifted = l.with_slacks(&x1).expect("lifts");
     let mut slack = vec![false; n];
     for k in 0..l.points() {
         for (i, &c) in bp.actuators.iter().enumerate() {
@@ -153,6 +153,15 @@ fn the_cost_stage_starts_with_its_power_slacks_centred() {
         e.contains(&n.to_string()) && e.contains(&x1.len().to_string()),
         "{e}"
     );
+    let feasibility =
+        HzdProblem::new(bp.clone(), config.clone(), Vec::new(), false).expect("problem");
+    assert!(!feasibility.layout.slacks && feasibility.layout.len() == x1.len());
+    let e = feasibility
+        .layout
+        .with_slacks(&x1)
+        .expect_err("no slacks to add")
+        .to_string();
+    assert!(e.contains("no slacks"), "{e}");
 
     let options = SolveOptions {
         tolerance: config.solver.tolerance,

@@ -18,7 +18,7 @@ pub fn midrange_slack_start(
     let mut costed =
         HzdProblem::new(biped.clone(), config.clone(), Vec::new(), true).expect("problem");
     let l = costed.layout.clone();
-    let mut x = l.with_slacks(feasible_x);
+    let mut x = l.with_slacks(feasible_x).expect("a feasibility point");
     let n = costed.num_variables();
     let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
     costed.variable_bounds(&mut lo, &mut hi);
