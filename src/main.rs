@@ -501,9 +501,20 @@ fn bench_plan(
         cfg.solver.backend = backend;
     }
     println!(
-        "{:>3} {:>9} {:>10} {:>11} {:>10} {:>11} {:>10}",
-        "run", "set-up s", "feas. iter", "feas. solve", "cost iter", "cost solve", "total s"
+        "{:>3} {:>9} {:>10} {:>11} {:>10} {:>11} {:>8} {:>8} {:>8} {:>8} {:>8}",
+        "run",
+        "set-up s",
+        "feas. iter",
+        "feas. solve",
+        "cost iter",
+        "cost solve",
+        "eval",
+        "factor",
+        "kkt sol",
+        "other",
+        "total s"
     );
+    let mut phases = Vec::with_capacity(runs);
     let mut totals = Vec::with_capacity(runs);
     let mut iterations = Vec::with_capacity(runs);
     let mut size = (0, 0);
@@ -514,10 +525,20 @@ fn bench_plan(
         let p = planner::plan::plan_gait(&model, "robot.urdf", &text, &cfg, &mut |_| {})?;
         let total = t0.elapsed().as_secs_f64();
         let (f, c) = (&p.stages[0], &p.stages[1]);
+        let phase = PhaseSeconds::of_plan(&p.stages);
         println!(
-            "{:>3} {:>9.3} {:>10} {:>10.3}s {:>10} {:>10.3}s {:>10.3}",
-            run, p.setup_time_s, f.iterations, f.solve_time_s, c.iterations, c.solve_time_s, total
+            "{:>3} {:>9.3} {:>10} {:>10.3}s {:>10} {:>10.3}s {:>8.3} {} {:>8.3}",
+            run,
+            p.setup_time_s,
+            f.iterations,
+            f.solve_time_s,
+            c.iterations,
+            c.solve_time_s,
+            phase.evaluation,
+            phase.columns(),
+            total
         );
+        phases.push(phase);
         totals.push(total);
         iterations.push(f.iterations + c.iterations);
         size = p.size;
@@ -541,6 +562,29 @@ fn bench_plan(
         } else {
             "NOT bit-identical"
         }
+    );
+    // Each phase's median over the runs (so they need not add up to the median total).
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[runs / 2]
+    };
+    let mut evaluation: Vec<f64> = phases.iter().map(|p| p.evaluation).collect();
+    let backend: Option<Vec<[f64; 3]>> = phases.iter().map(|p| p.backend).collect();
+    let split = match backend {
+        Some(b) => {
+            let column = |k: usize| median(&mut b.iter().map(|p| p[k]).collect());
+            format!(
+                "factorizations {:.3} s, solves with the factors {:.3} s, other {:.3} s",
+                column(0),
+                column(1),
+                column(2)
+            )
+        }
+        None => "the backend's own time is not split (ripopt does not time its phases)".into(),
+    };
+    println!(
+        "time by phase (medians): problem evaluation {:.3} s, {split}",
+        median(&mut evaluation)
     );
     println!(
         "anchors: CasADi + IPOPT + MUMPS on the same kind of problem (PLANNER-NOTES) 1.19 s solve \
@@ -860,21 +904,46 @@ fn plan(
         planned.size.0, planned.size.1, planned.setup_time_s
     );
     println!(
-        "{:<18} {:>8} {:>6} {:>12} {:>10} {:>9} {:>9}",
-        "stage", "status", "iter", "objective", "violation", "solve s", "eval s"
+        "{:<18} {:>8} {:>6} {:>6} {:>12} {:>10} {:>9} {:>8} {:>8} {:>8} {:>8}",
+        "stage",
+        "status",
+        "iter",
+        "resto",
+        "objective",
+        "violation",
+        "solve s",
+        "eval",
+        "factor",
+        "kkt sol",
+        "other"
     );
     for s in &planned.stages {
+        let phases = PhaseSeconds::of(s);
         println!(
-            "{:<18} {:>8} {:>6} {:>12.6} {:>10.1e} {:>9.3} {:>9.3}",
+            "{:<18} {:>8} {:>6} {:>6} {:>12.6} {:>10.1e} {:>9.3} {:>8.3} {}",
             s.stage,
             s.status,
             s.iterations,
+            s.restoration_iterations
+                .map_or("-".to_string(), |n| n.to_string()),
             s.objective,
             s.violation,
             s.solve_time_s,
-            s.evaluation_time_s
+            s.evaluation_time_s,
+            phases.columns()
         );
     }
+    println!(
+        "(resto: iterations in feasibility restoration; eval: problem functions and derivatives; \
+         factor: KKT assembly and LDLᵀ factorizations, {} in all; kkt sol: solves with the factors; \
+         other: the rest of the solver)",
+        planned
+            .stages
+            .iter()
+            .map(|s| s.phases.map_or("-".to_string(), |p| p.factorizations.to_string()))
+            .collect::<Vec<_>>()
+            .join(" + ")
+    );
     println!(
         "\nstep length {:.4} m | duration {:.4} s | speed {:.4} m/s | cost of transport {:.4}",
         g.step_length_m, g.step_duration_s, g.speed_mps, g.cost_of_transport
@@ -893,6 +962,54 @@ fn plan(
         }
     );
     Ok(())
+}
+
+/// A solve's time by phase, s: evaluation, then the backend's factorizations, solves and rest
+/// (`None` where the backend does not measure them: ripopt).
+#[derive(Clone, Copy, Default)]
+struct PhaseSeconds {
+    evaluation: f64,
+    backend: Option<[f64; 3]>,
+}
+
+impl PhaseSeconds {
+    fn of(stage: &planner::plan::StageReport) -> Self {
+        Self {
+            evaluation: stage.evaluation_time_s,
+            backend: stage.phases.map(|p| {
+                [
+                    p.factorization_time.as_secs_f64(),
+                    p.linear_solve_time.as_secs_f64(),
+                    p.other_time.as_secs_f64(),
+                ]
+            }),
+        }
+    }
+
+    /// Both stages of a plan together.
+    fn of_plan(stages: &[planner::plan::StageReport]) -> Self {
+        stages.iter().map(Self::of).fold(
+            Self {
+                evaluation: 0.0,
+                backend: Some([0.0; 3]),
+            },
+            |a, b| Self {
+                evaluation: a.evaluation + b.evaluation,
+                backend: a
+                    .backend
+                    .zip(b.backend)
+                    .map(|(x, y)| [x[0] + y[0], x[1] + y[1], x[2] + y[2]]),
+            },
+        )
+    }
+
+    /// The backend's three columns, 8 wide, `-` where it does not measure them.
+    fn columns(&self) -> String {
+        match self.backend {
+            Some([f, s, o]) => format!("{f:>8.3} {s:>8.3} {o:>8.3}"),
+            None => format!("{:>8} {:>8} {:>8}", "-", "-", "-"),
+        }
+    }
 }
 
 /// `target` as seen from the folder of `from` (for the gait file's robot reference).
@@ -928,7 +1045,8 @@ fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
         epsilon_per_s: epsilon,
         ..Default::default()
     };
-    let report = planner::verify::verify_gait(&robot, &gait, options)?;
+    let report = planner::verify::verify_gait(&robot, &gait, options)
+        .with_context(|| format!("{} fails its check", path.display()))?;
     println!(
         "gait {} (planned: {:.4} m in {:.4} s)",
         path.display(),
@@ -937,11 +1055,28 @@ fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
     );
     print!("{report}");
     if !report.passed(options.fixed_point_tolerance) {
-        bail!(
-            "the gait is unstable or has no periodic orbit (|λ|max {:.4}, residual {:.2e})",
-            report.spectral_radius,
-            report.fixed_point_residual
-        );
+        let tolerance = options.fixed_point_tolerance;
+        let consistency = planner::verify::CONSISTENCY_TOLERANCE_RAD;
+        let failed: Vec<String> = [
+            (report.fixed_point_residual >= tolerance).then(|| {
+                format!(
+                    "no periodic orbit: fixed-point residual {:.2e} ≥ {tolerance:.0e}",
+                    report.fixed_point_residual
+                )
+            }),
+            (report.spectral_radius >= 1.0)
+                .then(|| format!("unstable: |λ|max {:.4} ≥ 1", report.spectral_radius)),
+            (report.max_joint_difference_rad >= consistency).then(|| {
+                format!(
+                    "inconsistent with the plan: joints {:.4} rad from the planned step (≥ {consistency} rad)",
+                    report.max_joint_difference_rad
+                )
+            }),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        bail!("{} fails its check: {}", path.display(), failed.join("; "));
     }
     println!("stable periodic orbit");
     Ok(())

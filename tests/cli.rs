@@ -441,6 +441,13 @@ fn bench_plan_runs_the_native_backend_and_rejects_unknown_ones() {
     let (ok, out, err) = adam(&["bench", "plan", "--runs", "1", "--backend", "native"]);
     assert!(ok, "{err}");
     assert!(out.contains("Native backend: median"), "{out}");
+    // The time by phase: evaluation, then the native backend's own split.
+    assert!(
+        out.contains("time by phase (medians): problem evaluation")
+            && out.contains("factorizations")
+            && out.contains("solves with the factors"),
+        "{out}"
+    );
     // The iteration count printed after the median: 67 here; ripopt takes 85.
     let iterations: usize = out
         .split(" s and ")
@@ -454,4 +461,70 @@ fn bench_plan_runs_the_native_backend_and_rejects_unknown_ones() {
         !ok && err.contains("unknown backend `ipopt`") && err.contains("native"),
         "{err}"
     );
+}
+
+/// `adam plan` end to end: live progress, the summary table (with the solver's time by phase),
+/// the gait file it writes and its verification; `adam gait check` passes that file and fails,
+/// naming it, a copy whose swing-hip trajectory is shifted.
+#[test]
+fn plan_writes_a_gait_that_gait_check_passes_and_a_broken_copy_fails() {
+    let dir = format!("logs/cli-plan-{}", std::process::id());
+    let gait = format!("{dir}/gait.json");
+    let (ok, out, err) = adam(&[
+        "plan",
+        "--robot",
+        "configs/robots/adam_planar.urdf",
+        "--config",
+        "configs/planner/adam.toml",
+        "--out",
+        &gait,
+    ]);
+    assert!(ok, "{err}\n{out}");
+    for expected in [
+        "solve: feasibility",
+        "solve: cost of transport",
+        "iter    0  objective",
+        "resto",
+        "factor",
+        "kkt sol",
+        "step length 0.1500 m",
+        "|λ|max 0.86",
+        "stable periodic orbit",
+    ] {
+        assert!(out.contains(expected), "`{expected}` missing from\n{out}");
+    }
+    // Both stages optimal, none in restoration, and their factorization counts named.
+    let rows: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("feasibility ") || l.starts_with("cost of transport "))
+        .collect();
+    assert_eq!(rows.len(), 2, "{out}");
+    for row in rows {
+        let cells: Vec<&str> = row.split_whitespace().collect();
+        assert!(row.contains(" optimal "), "{row}");
+        assert!(cells.len() >= 11, "{row}");
+    }
+    assert!(out.contains(" in all; kkt sol"), "{out}");
+
+    let (ok, out, err) = adam(&["gait", "check", &gait]);
+    assert!(ok, "{err}\n{out}");
+    assert!(out.contains("stable periodic orbit"), "{out}");
+
+    let mut broken: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&gait).expect("gait written")).expect("json");
+    for a in broken["bezier"]["alpha"][2]
+        .as_array_mut()
+        .expect("alpha rows")
+    {
+        *a = serde_json::json!(a.as_f64().expect("number") + 0.3);
+    }
+    let broken_path = format!("{dir}/broken.json");
+    std::fs::write(&broken_path, broken.to_string()).expect("write");
+    let (ok, _, err) = adam(&["gait", "check", &broken_path]);
+    assert!(!ok, "a shifted swing hip must not pass");
+    assert!(
+        err.contains(&format!("{broken_path} fails its check")),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -39,6 +39,12 @@ pub struct StageReport {
     pub solve_time_s: f64,
     /// Wall time spent evaluating the problem (derivatives included), s.
     pub evaluation_time_s: f64,
+    /// Iterations of the backend's feasibility-restoration phase among `iterations` (native;
+    /// `None` if any part ran on ripopt, which does not say which iterations those are).
+    pub restoration_iterations: Option<usize>,
+    /// The rest of the solve time by phase (KKT factorizations, solves with the factors,
+    /// other), where the backend measures it (native; `None` if any part ran on ripopt).
+    pub phases: Option<nlp::PhaseTimes>,
     /// The backend that finished the solve (ripopt after a native solve whose restoration
     /// failed).
     pub backend: nlp::Backend,
@@ -51,6 +57,11 @@ impl StageReport {
         self.iterations += earlier.iterations;
         self.solve_time_s += earlier.solve_time_s;
         self.evaluation_time_s += earlier.evaluation_time_s;
+        self.restoration_iterations = self
+            .restoration_iterations
+            .zip(earlier.restoration_iterations)
+            .map(|(a, b)| a + b);
+        self.phases = nlp::PhaseTimes::both(self.phases, earlier.phases);
     }
 }
 
@@ -299,12 +310,8 @@ pub(crate) fn solve_stage_attempt(
         };
         let mut sol = nlp::solve_with_callback(problem, &options, &mut callback)
             .map_err(|e| PlannerError::Solver(e.to_string()))?;
-        if let Some(e) = earlier {
-            let s = &mut sol.statistics;
-            s.iterations += e.iterations;
-            s.total_time += e.total_time;
-            s.evaluation_time += e.evaluation_time;
-            s.solver_time += e.solver_time;
+        if let Some(e) = &earlier {
+            sol.statistics.absorb(e);
         }
         if !retry_with_ripopt(options.backend, sol.status, guards, capped || stalled) {
             break sol;
@@ -326,6 +333,8 @@ pub(crate) fn solve_stage_attempt(
         violation,
         solve_time_s: sol.statistics.total_time.as_secs_f64(),
         evaluation_time_s: sol.statistics.evaluation_time.as_secs_f64(),
+        restoration_iterations: sol.statistics.restoration_iterations,
+        phases: sol.statistics.phases,
         backend: options.backend,
     };
     // The feasibility stage only has to deliver a feasible start for the second: a point that
@@ -397,7 +406,11 @@ pub fn plan_gait(
     let mut capped = config.clone();
     capped.solver.max_iterations = config.solver.max_iterations.min(FEASIBILITY_MAX_ITERATIONS);
     // The dropped starts' work, counted in the stage's figures.
-    let mut spent = StageReport::default();
+    let mut spent = StageReport {
+        restoration_iterations: Some(0),
+        phases: Some(nlp::PhaseTimes::default()),
+        ..StageReport::default()
+    };
     let mut found = None;
     let mut last_error = None;
     for (k, &(step, duration)) in starts.iter().enumerate() {
@@ -429,7 +442,10 @@ pub fn plan_gait(
                 last_error = a.into_result().err();
             }
             Err(e) => {
+                // Not split by phase: the solve reported nothing.
                 spent.solve_time_s += attempt.elapsed().as_secs_f64();
+                spent.phases = None;
+                spent.restoration_iterations = None;
                 last_error = Some(e);
             }
         }
@@ -582,6 +598,43 @@ mod tests {
         ] {
             assert!(!retry_with_ripopt(Backend::Native, status, free, false));
         }
+    }
+
+    /// A stage that stands for several solves reports all their work, and a time by phase
+    /// only if every solve measured one (a dropped start on ripopt makes it unknown).
+    #[test]
+    fn a_stage_report_absorbs_the_solves_it_stands_for() {
+        let phases = nlp::PhaseTimes {
+            factorizations: 40,
+            factorization_time: std::time::Duration::from_millis(100),
+            linear_solves: 41,
+            linear_solve_time: std::time::Duration::from_millis(10),
+            other_time: std::time::Duration::from_millis(30),
+        };
+        let native = StageReport {
+            iterations: 39,
+            solve_time_s: 0.25,
+            evaluation_time_s: 0.11,
+            restoration_iterations: Some(2),
+            phases: Some(phases),
+            ..StageReport::default()
+        };
+        let mut both = native.clone();
+        both.absorb(&native);
+        assert_eq!(both.iterations, 78);
+        assert_eq!(both.restoration_iterations, Some(4));
+        assert_eq!((both.solve_time_s, both.evaluation_time_s), (0.5, 0.22));
+        let p = both.phases.expect("both measured");
+        assert_eq!((p.factorizations, p.linear_solves), (80, 82));
+        assert_eq!(p.factorization_time, std::time::Duration::from_millis(200));
+        let ripopt = StageReport {
+            iterations: 58,
+            ..StageReport::default()
+        };
+        let mut mixed = native.clone();
+        mixed.absorb(&ripopt);
+        assert_eq!(mixed.iterations, 97);
+        assert_eq!((mixed.restoration_iterations, mixed.phases), (None, None));
     }
 
     #[test]

@@ -373,6 +373,12 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     // The dropped starts did enter restoration (that is why they were dropped); the last did not.
     assert!(restored[..starts - 1].iter().all(|&r| r), "{restored:?}");
     assert!(!restored[starts - 1], "{restored:?}");
+    // ripopt neither flags its restoration iterations nor times its phases: the report says
+    // so instead of a zero.
+    assert_eq!(
+        (feasibility.restoration_iterations, feasibility.phases),
+        (None, None)
+    );
     let d = gait.gait.step_duration_s;
     assert!((0.8 - 1e-6..=0.9 + 1e-6).contains(&d), "{d}");
 }
@@ -464,6 +470,17 @@ fn the_native_backend_plans_a_gait_that_verifies() {
         );
         assert_eq!(s.status, "optimal");
         assert!(s.violation < 1e-6, "{}: violation {}", s.stage, s.violation);
+        // The native backend says where its time went: no restoration, at least one KKT
+        // factorization and solve per iteration, and the phases add up to the solve time
+        // (they are disjoint wall times; 1 µs of rounding in the seconds).
+        assert_eq!(s.restoration_iterations, Some(0), "{s:?}");
+        let p = s.phases.expect("the native backend times its phases");
+        println!("  {p:?}");
+        assert!(p.factorizations >= s.iterations, "{p:?}");
+        assert!(p.linear_solves >= s.iterations, "{p:?}");
+        let phases = s.evaluation_time_s
+            + (p.factorization_time + p.linear_solve_time + p.other_time).as_secs_f64();
+        assert!((phases - s.solve_time_s).abs() < 1e-6, "{phases} vs {s:?}");
     }
     let g = &a.gait;
     // Both stages by the native backend alone (no re-solve by ripopt), and the file says so.

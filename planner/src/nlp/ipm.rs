@@ -7,8 +7,8 @@
 use super::kkt::KktSystem;
 use super::restoration::Restoration;
 use super::solver::{
-    EvaluationCounts, IterationControl, IterationReport, NlpSolver, Result, Solution, SolveOptions,
-    SolveStatistics, SolveStatus,
+    EvaluationCounts, IterationControl, IterationReport, NlpSolver, PhaseTimes, Result, Solution,
+    SolveOptions, SolveStatistics, SolveStatus,
 };
 use super::{DomainError, NlpProblem};
 use std::time::{Duration, Instant};
@@ -284,6 +284,11 @@ struct Ipm<'a> {
     paired_trials: usize,
     twin_accepted: usize,
     iterations: usize,
+    /// Factorizations, solves and their wall times, a restoration phase's included (the
+    /// `other_time` is derived at the end).
+    phases: PhaseTimes,
+    /// Iterations inside restoration phases.
+    restoration_iterations: usize,
     /// False inside a restoration phase (which has none of its own).
     allow_restoration: bool,
     /// Inside a restoration phase: called with each accepted iterate; true ends the phase.
@@ -339,6 +344,8 @@ impl<'a> Ipm<'a> {
             paired_trials: 0,
             twin_accepted: 0,
             iterations: 0,
+            phases: PhaseTimes::default(),
+            restoration_iterations: 0,
             allow_restoration: true,
             exit_test: None,
         }
@@ -826,6 +833,7 @@ impl<'a> Ipm<'a> {
                     let (ra, rb) =
                         rayon::join(|| trial(kkt, diagonals), || trial(twin, next_diagonals));
                     trials += 2;
+                    self.phases.factorizations += 2;
                     self.paired_trials += 1;
                     if correct(ra) {
                         return Some(self.accept_delta_w(delta_w));
@@ -840,6 +848,7 @@ impl<'a> Ipm<'a> {
                 }
                 _ => {
                     trials += 1;
+                    self.phases.factorizations += 1;
                     if correct(trial(kkt, diagonals)) {
                         return Some(self.accept_delta_w(delta_w));
                     }
@@ -924,7 +933,11 @@ impl<'a> Ipm<'a> {
                     0.0
                 };
         }
-        let sol = self.kkt.as_mut()?.solve(&rhs, REFINEMENTS)?;
+        let t = Instant::now();
+        let sol = self.kkt.as_mut()?.solve(&rhs, REFINEMENTS);
+        self.phases.linear_solve_time += t.elapsed();
+        self.phases.linear_solves += 1;
+        let sol = sol?;
         let mut d = Direction {
             x: sol[..n].to_vec(),
             y: sol[n..].to_vec(),
@@ -1118,7 +1131,10 @@ impl<'a> Ipm<'a> {
                 return SolveStatus::EvaluationError;
             }
             let (sx, ss) = self.sigmas();
-            let Some(delta_w) = self.factorize(&sx, &ss) else {
+            let t = Instant::now();
+            let factorized = self.factorize(&sx, &ss);
+            self.phases.factorization_time += t.elapsed();
+            let Some(delta_w) = factorized else {
                 return SolveStatus::NumericalError;
             };
             let (gphi_x, gphi_s) = self.barrier_gradient();
@@ -1384,6 +1400,14 @@ impl<'a> Ipm<'a> {
         };
         let stats = solution.statistics;
         self.prob.time += stats.evaluation_time;
+        if let Some(p) = stats.phases {
+            // Its other time stays in this solve's, which is derived at the end.
+            self.phases += PhaseTimes {
+                other_time: Duration::ZERO,
+                ..p
+            };
+        }
+        self.restoration_iterations += stats.iterations;
         let counts = &mut self.prob.counts;
         counts.objective += stats.evaluation_counts.objective;
         counts.gradient += stats.evaluation_counts.gradient;
@@ -1595,6 +1619,12 @@ impl<'a> Ipm<'a> {
             }
         }
         let lambda = (0..m).map(|i| self.y[i] * self.prob.sg[i] / sf).collect();
+        let solver_time = total.saturating_sub(self.prob.time);
+        let phases = PhaseTimes {
+            other_time: solver_time
+                .saturating_sub(self.phases.factorization_time + self.phases.linear_solve_time),
+            ..self.phases
+        };
         Solution {
             status,
             constraint_values: g,
@@ -1608,8 +1638,10 @@ impl<'a> Ipm<'a> {
                 dual_infeasibility: dual_inf,
                 evaluation_counts: self.prob.counts,
                 evaluation_time: self.prob.time,
-                solver_time: total.saturating_sub(self.prob.time),
+                solver_time,
                 total_time: total,
+                restoration_iterations: Some(self.restoration_iterations),
+                phases: Some(phases),
             },
             x: std::mem::take(&mut self.x),
         }
@@ -2079,5 +2111,24 @@ mod tests {
         assert!(restoring > 0);
         assert!(reports.windows(2).all(|w| w[1].iteration > w[0].iteration));
         assert_eq!(reports.last().unwrap().iteration, s.statistics.iterations);
+        // The statistics name the restoration iterations, and its factorizations are counted:
+        // one or more per iteration, but for the return from each restoration (one iteration
+        // more, with no factorization of its own).
+        assert_eq!(s.statistics.restoration_iterations, Some(restoring));
+        let entries = reports
+            .windows(2)
+            .filter(|w| !w[0].restoration && w[1].restoration)
+            .count();
+        let p = s.statistics.phases.unwrap();
+        println!("{entries} restoration phase(s), {p:?}");
+        assert!(entries > 0);
+        assert!(
+            p.factorizations + entries >= s.statistics.iterations,
+            "{p:?}"
+        );
+        assert_eq!(
+            p.factorization_time + p.linear_solve_time + p.other_time,
+            s.statistics.solver_time
+        );
     }
 }

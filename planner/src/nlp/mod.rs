@@ -141,5 +141,6 @@ pub use problem::{DomainError, NlpProblem, SparsityPattern};
 pub use ripopt_backend::RipoptSolver;
 pub use solver::{
     solve, solve_with_callback, Backend, EvaluationCounts, IterationControl, IterationReport,
-    NlpError, NlpSolver, Result, Solution, SolveOptions, SolveStatistics, SolveStatus, WarmStart,
+    NlpError, NlpSolver, PhaseTimes, Result, Solution, SolveOptions, SolveStatistics, SolveStatus,
+    WarmStart,
 };

@@ -391,6 +391,10 @@ impl NlpSolver for RipoptSolver {
                 evaluation_time,
                 solver_time: total_time.saturating_sub(evaluation_time),
                 total_time,
+                // ripopt's restoration is a nested solve whose reports are not flagged
+                // (`queue_iteration_report`), and it does not time its linear algebra.
+                restoration_iterations: None,
+                phases: None,
             },
             x: result.x,
             constraint_values: result.constraint_values,

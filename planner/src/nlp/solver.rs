@@ -244,6 +244,73 @@ pub struct SolveStatistics {
     pub solver_time: Duration,
     /// Wall time of the whole solve.
     pub total_time: Duration,
+    /// Iterations spent in the feasibility-restoration phase (counted in `iterations` too),
+    /// for the backends that say which ones those are (native; `None` for ripopt).
+    pub restoration_iterations: Option<usize>,
+    /// Where the backend's own time (`solver_time`) went, for the backends that measure it
+    /// (the native interior point; `None` for ripopt).
+    pub phases: Option<PhaseTimes>,
+}
+
+/// The backend's own work by phase: the KKT factorizations, the solves with their factors and
+/// the rest. With the evaluation time these add up to the total: the phases are disjoint wall
+/// times (two inertia-correction trials factorized at once count once).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PhaseTimes {
+    /// KKT matrices assembled and factorized, every inertia-correction trial included.
+    pub factorizations: usize,
+    /// Wall time of those assemblies and factorizations.
+    pub factorization_time: Duration,
+    /// Solves with a factor: search directions and second-order corrections (iterative
+    /// refinement inside each).
+    pub linear_solves: usize,
+    /// Wall time of those solves.
+    pub linear_solve_time: Duration,
+    /// The rest of the backend's time: start point, scaling, error norms, barrier updates, the
+    /// line search's arithmetic and the restoration problem's set-up.
+    pub other_time: Duration,
+}
+
+impl std::ops::AddAssign for PhaseTimes {
+    fn add_assign(&mut self, other: Self) {
+        self.factorizations += other.factorizations;
+        self.factorization_time += other.factorization_time;
+        self.linear_solves += other.linear_solves;
+        self.linear_solve_time += other.linear_solve_time;
+        self.other_time += other.other_time;
+    }
+}
+
+impl PhaseTimes {
+    /// The phases of two solves together, if both measured them.
+    pub fn both(a: Option<Self>, b: Option<Self>) -> Option<Self> {
+        let (mut a, b) = (a?, b?);
+        a += b;
+        Some(a)
+    }
+}
+
+impl SolveStatistics {
+    /// Adds the work of `earlier`, a solve this one continues (a fallback to another backend):
+    /// iterations, evaluations and times are the sum; the phases only if both solves measured
+    /// them.
+    pub fn absorb(&mut self, earlier: &SolveStatistics) {
+        self.iterations += earlier.iterations;
+        self.restoration_iterations = self
+            .restoration_iterations
+            .zip(earlier.restoration_iterations)
+            .map(|(a, b)| a + b);
+        let (c, e) = (&mut self.evaluation_counts, &earlier.evaluation_counts);
+        c.objective += e.objective;
+        c.gradient += e.gradient;
+        c.constraints += e.constraints;
+        c.jacobian += e.jacobian;
+        c.hessian += e.hessian;
+        self.evaluation_time += earlier.evaluation_time;
+        self.solver_time += earlier.solver_time;
+        self.total_time += earlier.total_time;
+        self.phases = PhaseTimes::both(self.phases, earlier.phases);
+    }
 }
 
 /// How often each problem function was called.
@@ -381,6 +448,93 @@ mod tests {
         assert!(stats.evaluation_counts.hessian >= stats.iterations.saturating_sub(1));
         assert!(stats.evaluation_time <= stats.total_time);
         assert_eq!(stats.evaluation_time + stats.solver_time, stats.total_time);
+    }
+
+    /// The native backend splits its own time into disjoint phases that add up to it: were a
+    /// phase to overlap the evaluations (or another phase), the derived rest would be clipped
+    /// at zero and the sum would exceed the solver time.
+    #[test]
+    fn the_native_backend_splits_its_time_by_phase_and_ripopt_says_it_does_not() {
+        let native = solve(&hs71(), &SolveOptions::default()).unwrap().statistics;
+        let p = native.phases.expect("the native backend times its phases");
+        println!("{native:?}");
+        assert_eq!(native.restoration_iterations, Some(0));
+        // At least one factorization and one solve per iteration (the last iterate is only
+        // tested, not stepped from).
+        assert!(p.factorizations >= native.iterations, "{p:?}");
+        assert!(p.linear_solves >= native.iterations, "{p:?}");
+        assert!(p.factorization_time > Duration::ZERO && p.linear_solve_time > Duration::ZERO);
+        assert_eq!(
+            p.factorization_time + p.linear_solve_time + p.other_time,
+            native.solver_time,
+            "{p:?}"
+        );
+        let ripopt = solve(
+            &hs71(),
+            &SolveOptions {
+                backend: Backend::Ripopt,
+                ..SolveOptions::default()
+            },
+        )
+        .unwrap()
+        .statistics;
+        assert_eq!((ripopt.phases, ripopt.restoration_iterations), (None, None));
+    }
+
+    /// A solve continued on another backend reports the sum of both, and a phase split only
+    /// where both solves measured it.
+    #[test]
+    fn absorbing_an_earlier_solve_adds_its_work() {
+        let phases = PhaseTimes {
+            factorizations: 3,
+            factorization_time: Duration::from_millis(30),
+            linear_solves: 4,
+            linear_solve_time: Duration::from_millis(4),
+            other_time: Duration::from_millis(6),
+        };
+        let native = SolveStatistics {
+            iterations: 3,
+            restoration_iterations: Some(1),
+            evaluation_counts: EvaluationCounts {
+                objective: 5,
+                hessian: 3,
+                ..EvaluationCounts::default()
+            },
+            evaluation_time: Duration::from_millis(10),
+            solver_time: Duration::from_millis(40),
+            total_time: Duration::from_millis(50),
+            phases: Some(phases),
+            ..SolveStatistics::default()
+        };
+        let mut twice = native;
+        twice.absorb(&native);
+        assert_eq!(twice.iterations, 6);
+        assert_eq!(twice.restoration_iterations, Some(2));
+        assert_eq!(
+            (
+                twice.evaluation_counts.objective,
+                twice.evaluation_counts.hessian
+            ),
+            (10, 6)
+        );
+        assert_eq!(twice.total_time, Duration::from_millis(100));
+        assert_eq!(twice.evaluation_time + twice.solver_time, twice.total_time);
+        let p = twice.phases.unwrap();
+        assert_eq!((p.factorizations, p.linear_solves), (6, 8));
+        assert_eq!(
+            p.factorization_time + p.linear_solve_time + p.other_time,
+            twice.solver_time
+        );
+        let mut fallback = SolveStatistics {
+            iterations: 7,
+            ..SolveStatistics::default()
+        };
+        fallback.absorb(&native);
+        assert_eq!(fallback.iterations, 10);
+        assert_eq!(
+            (fallback.phases, fallback.restoration_iterations),
+            (None, None)
+        );
     }
 
     #[test]
