@@ -12,6 +12,12 @@
 //! - The Jacobian of P is taken by central finite differences of the simulated map: this is a
 //!   check of the optimizer's result, not part of any solve loop.
 //! - Stability: every eigenvalue of DP at the fixed point has |λ| < 1.
+//! - Consistency: the orbit is the planned one, its joints within [`CONSISTENCY_TOLERANCE_RAD`]
+//!   of the planned post-impact state and its step duration within [`STEP_DURATION_TOLERANCE`] of
+//!   the planned one; Newton is stopped when it takes the joints more than
+//!   [`NEWTON_RADIUS_RAD`] from the plan. The report also gives one closed-loop step from the
+//!   planned state (the planned step as the closed loop walks it) and
+//!   [`VerifyReport::failures`] says what fails, with the figure and its limit.
 
 use crate::biped::PlanarBiped;
 use crate::{PlannerError, Result};
@@ -26,6 +32,21 @@ use std::fmt;
 /// state for the gait to count as the planned one, rad (about 3°: collocation error with N = 20
 /// is near 1e-3 rad; a different orbit is off by tenths of a radian).
 pub const CONSISTENCY_TOLERANCE_RAD: f64 = 0.05;
+
+/// Largest relative difference between the step duration of the closed-loop fixed point and the
+/// planned one for the gait to count as the planned one. The fixed point's speed is sensitive:
+/// the plan's collocation error, amplified by 1/(1 − |λ|max), moves it, and ADAM's N = 20 plan
+/// (|λ|max 0.86) steps in 0.991 s at its fixed point against 0.900 s planned (10 %; N = 30: 3 %,
+/// N = 40: 1 %); the co-designed ADAM 4 %, the five-link walker 0.6 %. 20 % leaves twice
+/// ADAM's margin, and rejects a gait whose joints match but whose pace does not (a 0.005 rad
+/// shift of the swing hip's Bézier coefficients: 0.497 s).
+pub const STEP_DURATION_TOLERANCE: f64 = 0.2;
+
+/// How far (joint angles, rad) Newton on the Poincaré map may take its iterate from the planned
+/// post-impact state before the check gives up: ten times [`CONSISTENCY_TOLERANCE_RAD`], so an
+/// orbit found there would fail the consistency check anyway, and the simulation is not asked
+/// to step from states where the robot has long fallen (joints hundreds of radians off).
+pub const NEWTON_RADIUS_RAD: f64 = 0.5;
 
 /// Options of the verification.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,16 +93,58 @@ pub struct VerifyReport {
     pub step_duration_s: f64,
     /// Simulated step length, m.
     pub step_length_m: f64,
+    /// The step the gait file plans: duration, s, and length, m.
+    pub planned_step: (f64, f64),
+    /// One closed-loop step from the planned x⁺: duration, s, and length, m (the planned
+    /// step as the closed loop walks it).
+    pub step_from_plan: (f64, f64),
 }
 
 impl VerifyReport {
     /// Stable and consistent: the fixed point exists to `tol`, every |λ| < 1, and the orbit is
-    /// the planned one (joints within [`CONSISTENCY_TOLERANCE_RAD`] of the planned x⁺).
+    /// the planned one (joints within [`CONSISTENCY_TOLERANCE_RAD`] of the planned x⁺, steps
+    /// within [`STEP_DURATION_TOLERANCE`] of the planned duration).
     pub fn passed(&self, tol: f64) -> bool {
-        self.fixed_point_residual < tol
-            && self.spectral_radius < 1.0
-            && self.max_joint_difference_rad < CONSISTENCY_TOLERANCE_RAD
+        self.failures(tol).is_empty()
     }
+
+    /// What fails the check, one sentence each with the figure and its limit (empty: passed).
+    pub fn failures(&self, tol: f64) -> Vec<String> {
+        let mut failed = Vec::new();
+        if !below(self.fixed_point_residual, tol) {
+            failed.push(format!(
+                "no periodic orbit: fixed-point residual {:.2e} (limit {tol:.0e})",
+                self.fixed_point_residual
+            ));
+        }
+        if !below(self.spectral_radius, 1.0) {
+            failed.push(format!("unstable: |λ|max {:.4} ≥ 1", self.spectral_radius));
+        }
+        if !below(self.max_joint_difference_rad, CONSISTENCY_TOLERANCE_RAD) {
+            failed.push(format!(
+                "not the planned orbit: its joints are {:.4} rad from the planned x⁺ (limit \
+                 {CONSISTENCY_TOLERANCE_RAD} rad)",
+                self.max_joint_difference_rad
+            ));
+        }
+        let planned_s = self.planned_step.0;
+        let off = (self.step_duration_s - planned_s).abs() / planned_s;
+        if !below(off, STEP_DURATION_TOLERANCE) {
+            failed.push(format!(
+                "not the planned pace: the orbit steps in {:.4} s, the plan in {planned_s:.4} s \
+                 ({:.0} % off, limit {:.0} %)",
+                self.step_duration_s,
+                100.0 * off,
+                100.0 * STEP_DURATION_TOLERANCE
+            ));
+        }
+        failed
+    }
+}
+
+/// `value < limit`, false for NaN: a check that cannot be computed fails.
+fn below(value: f64, limit: f64) -> bool {
+    value < limit
 }
 
 impl fmt::Display for VerifyReport {
@@ -118,6 +181,15 @@ impl fmt::Display for VerifyReport {
             f,
             "simulated step            {:.4} m in {:.4} s",
             self.step_length_m, self.step_duration_s
+        )?;
+        writeln!(
+            f,
+            "step from the planned x⁺  {:.4} m in {:.4} s (planned {:.4} m in {:.4} s), |P(x⁺) − x⁺| {:.3e}",
+            self.step_from_plan.1,
+            self.step_from_plan.0,
+            self.planned_step.1,
+            self.planned_step.0,
+            self.planned_state_residual
         )
     }
 }
@@ -566,7 +638,8 @@ pub fn verify_gait_with(
         .chain(bp.reduced.iter().map(|&c| state.dq[c]))
         .collect();
     let mut x = DVector::from_vec(planned.clone());
-    let planned_state_residual = (cl.poincare(x.as_slice())? - &x).amax();
+    let from_plan = cl.step(x.as_slice())?;
+    let planned_state_residual = (&from_plan.next - &x).amax();
     let n = 2 * nq;
     let mut iterations = 0;
     let mut residual;
@@ -601,6 +674,17 @@ pub fn verify_gait_with(
             .ok_or_else(|| PlannerError::Solver("DP − I is singular".into()))?;
         x += dx;
         iterations += 1;
+        let away = (1..nq)
+            .map(|i| (x[i] - planned[i]).abs())
+            .fold(0.0, f64::max);
+        if !below(away, NEWTON_RADIUS_RAD) {
+            return Err(PlannerError::Solver(format!(
+                "no periodic orbit near the planned step: Newton on the Poincaré map took the \
+                 joints {away:.3} rad from the planned post-impact state at iteration \
+                 {iterations} (more than {NEWTON_RADIUS_RAD} rad; one step from the planned \
+                 state misses it by {planned_state_residual:.2e})"
+            )));
+        }
     }
     let step = cl.step(x.as_slice())?;
     residual = (&step.next - &x).amax();
@@ -625,6 +709,8 @@ pub fn verify_gait_with(
         max_output_error_rad: step.max_output_error_rad,
         step_duration_s: step.duration_s,
         step_length_m: step.length_m,
+        planned_step: (gait.step_duration_s, gait.step_length_m),
+        step_from_plan: (from_plan.duration_s, from_plan.length_m),
     })
 }
 

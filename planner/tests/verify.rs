@@ -26,6 +26,44 @@ fn shipped_gait_is_a_stable_periodic_orbit() {
         (report.step_length_m - gait.step_length_m).abs() < 2e-3,
         "{report}"
     );
+    // One closed-loop step from the planned x⁺ is the planned step: 0.9001 s against 0.8999 s,
+    // 0.1503 m against 0.1500 m (the collocation error of N = 20; the fixed point, which that
+    // error moves by 1/(1 − |λ|max), steps in 0.991 s, within STEP_DURATION_TOLERANCE).
+    let (planned_s, planned_m) = report.planned_step;
+    assert_eq!(
+        report.planned_step,
+        (gait.step_duration_s, gait.step_length_m)
+    );
+    let (from_plan_s, from_plan_m) = report.step_from_plan;
+    assert!((from_plan_s / planned_s - 1.0).abs() < 1e-3, "{report}");
+    assert!((from_plan_m - planned_m).abs() < 1e-3, "{report}");
+    assert!(report.failures(1e-6).is_empty(), "{report}");
+}
+
+/// A 0.005 rad shift of the swing hip's Bézier coefficients keeps the orbit's joints within
+/// 0.015 rad of the plan and the orbit stable, but the robot walks it in 0.50 s steps instead of
+/// 0.90 s: not the planned gait, and the check says so (and only that).
+#[test]
+fn a_gait_with_the_planned_joints_but_another_pace_is_not_the_plan() {
+    let (mut gait, robot) = load_gait_and_robot(Path::new(GAIT)).expect("loads");
+    for a in &mut gait.bezier.alpha[2] {
+        *a += 0.005;
+    }
+    let report = verify_gait(&robot, &gait, VerifyOptions::default()).expect("an orbit exists");
+    println!("{report}");
+    assert!(report.fixed_point_residual < 1e-6 && report.spectral_radius < 1.0);
+    assert!(report.max_joint_difference_rad < 0.02, "{report}");
+    assert!(
+        report.step_duration_s < 0.6 * gait.step_duration_s,
+        "{report}"
+    );
+    let failures = report.failures(1e-6);
+    assert_eq!(failures.len(), 1, "{failures:?}");
+    assert!(
+        failures[0].starts_with("not the planned pace"),
+        "{failures:?}"
+    );
+    assert!(!report.passed(1e-6));
 }
 
 #[test]
@@ -83,13 +121,14 @@ fn a_gait_with_a_changed_robot_or_broken_outputs_is_rejected() {
     for a in &mut gait.bezier.alpha[2] {
         *a += 0.3;
     }
-    let verdict = verify_gait(&robot, &gait, VerifyOptions::default());
-    if let Ok(r) = &verdict {
-        println!("{r}");
-    }
+    // Newton on the Poincaré map runs off (the first step takes the joints 0.87 rad away):
+    // the check stops there and says so, rather than simulating a robot that has long fallen.
+    let e = verify_gait(&robot, &gait, VerifyOptions::default())
+        .expect_err("a shifted swing-hip trajectory must not verify");
     assert!(
-        !verdict.is_ok_and(|r| r.passed(1e-6)),
-        "a shifted swing-hip trajectory must not verify"
+        e.to_string()
+            .contains("no periodic orbit near the planned step"),
+        "{e}"
     );
 }
 
