@@ -43,6 +43,12 @@ use std::time::{Duration, Instant};
 ///   reported with `restoration: true`. A restoration that converges to an infeasible point
 ///   ends the solve as [`SolveStatus::Infeasible`], one that fails as
 ///   [`SolveStatus::RestorationFailed`].
+/// * Ends: [`SolveStatus::Optimal`] at the tolerances; [`SolveStatus::Acceptable`] after 15
+///   iterations in a row within IPOPT's acceptable tolerances (KKT error 1e-6, violation 1e-2,
+///   complementarity 1e-2), or when the solve fails numerically (no factorization with the
+///   right inertia, no direction, a failed restoration) at a point within them, as IPOPT's
+///   `STOP_AT_ACCEPTABLE_POINT`; [`SolveStatus::Diverging`] once |x| > 1e20;
+///   [`SolveStatus::IterationLimit`], [`SolveStatus::TimeLimit`], [`SolveStatus::UserStop`].
 #[derive(Debug, Clone, Copy, Default)]
 pub struct NativeSolver;
 
@@ -357,7 +363,36 @@ impl<'a> Ipm<'a> {
     ) -> Solution {
         let start = Instant::now();
         let status = self.iterate(on_iteration, start);
+        let status = self.acceptable_instead_of(status);
         self.finish(status, start)
+    }
+
+    /// IPOPT's `STOP_AT_ACCEPTABLE_POINT`: a solve that fails numerically (no factorization with
+    /// the right inertia, no direction, a failed restoration phase) at an iterate that meets the
+    /// acceptable tolerances ends `Acceptable` there, not as a failure. Not inside a restoration
+    /// phase, whose failure the outer solve handles.
+    fn acceptable_instead_of(&self, status: SolveStatus) -> SolveStatus {
+        let numerical = matches!(
+            status,
+            SolveStatus::NumericalError | SolveStatus::RestorationFailed
+        );
+        if !(numerical && self.allow_restoration && !self.xb.is_empty()) {
+            return status;
+        }
+        let (error, viol, _, compl) = self.errors(0.0);
+        if self.within_acceptable_tolerances(error, viol, compl) {
+            SolveStatus::Acceptable
+        } else {
+            status
+        }
+    }
+
+    /// IPOPT's acceptable point: the scaled KKT error, the violation and the complementarity
+    /// (as [`Self::errors`] gives them) within the acceptable tolerances.
+    fn within_acceptable_tolerances(&self, error: f64, viol: f64, compl: f64) -> bool {
+        error <= ACCEPTABLE_TOL
+            && viol <= ACCEPTABLE_VIOLATION
+            && compl / self.prob.sf <= ACCEPTABLE_COMPLEMENTARITY
     }
 
     /// Relaxed bounds, the scaled start point, slacks and multipliers. `Err` ends the solve.
@@ -1080,10 +1115,7 @@ impl<'a> Ipm<'a> {
                 on_iteration(&report);
                 return SolveStatus::Optimal;
             }
-            if error <= ACCEPTABLE_TOL
-                && viol <= ACCEPTABLE_VIOLATION
-                && compl / self.prob.sf <= ACCEPTABLE_COMPLEMENTARITY
-            {
+            if self.within_acceptable_tolerances(error, viol, compl) {
                 acceptable_count += 1;
                 if acceptable_count >= ACCEPTABLE_ITER {
                     on_iteration(&report);
@@ -1713,7 +1745,7 @@ mod tests {
     use num_dual::DualNum;
 
     use crate::nlp::ad::{AdModel, DenseAdProblem};
-    use crate::nlp::test_problems::Hs71;
+    use crate::nlp::test_problems::{Hs71, Infeasible};
     use crate::nlp::{
         solve, solve_with_callback, Backend, DomainError, IterationControl, NlpProblem,
         SolveOptions, SolveStatus, SparsityPattern,
@@ -1998,35 +2030,6 @@ mod tests {
             .build()
             .unwrap();
         assert!(!pool.install(|| super::Ipm::new(&problem, &options).pair_trials));
-    }
-
-    /// min x subject to x² ≤ −1: no feasible point.
-    struct Infeasible;
-
-    impl AdModel for Infeasible {
-        fn num_variables(&self) -> usize {
-            1
-        }
-        fn num_constraints(&self) -> usize {
-            1
-        }
-        fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-            lower[0] = -10.0;
-            upper[0] = 10.0;
-        }
-        fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
-            lower[0] = f64::NEG_INFINITY;
-            upper[0] = -1.0;
-        }
-        fn initial_point(&self, x0: &mut [f64]) {
-            x0[0] = 3.0;
-        }
-        fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
-            x[0]
-        }
-        fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
-            g[0] = x[0] * x[0];
-        }
     }
 
     #[test]

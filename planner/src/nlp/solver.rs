@@ -537,6 +537,65 @@ mod tests {
         );
     }
 
+    /// Every end the trait names is reached, by both backends where they share it: Optimal
+    /// (HS71), Infeasible (x² ≤ −1), IterationLimit (HS71 in 2 iterations), TimeLimit (1 ns of
+    /// wall time), Diverging
+    /// (min −x₀², both at iteration 67, x₀ ≈ 2.5e21 past IPOPT's 1e20) and Acceptable: HS71 to
+    /// an unreachable tolerance of 1e-20 fails numerically once μ is tiny, at a point within
+    /// the acceptable tolerances, which the native backend reports as IPOPT does
+    /// (`STOP_AT_ACCEPTABLE_POINT`); ripopt ends with a tiny step there.
+    #[test]
+    fn every_status_is_reached_by_both_backends() {
+        use crate::nlp::test_problems::{Infeasible, Unbounded};
+        for backend in [Backend::Native, Backend::Ripopt] {
+            let options = SolveOptions {
+                backend,
+                ..SolveOptions::default()
+            };
+            let status = |problem: &dyn NlpProblem, options: &SolveOptions| {
+                let s = solve(problem, options).unwrap();
+                println!(
+                    "{backend:?}: {:?} in {} iterations, f = {}",
+                    s.status, s.statistics.iterations, s.statistics.objective
+                );
+                s
+            };
+            let optimal = status(&hs71(), &options);
+            assert_eq!(optimal.status, SolveStatus::Optimal);
+            let infeasible = status(&DenseAdProblem::new(Infeasible), &options);
+            assert_eq!(infeasible.status, SolveStatus::Infeasible, "{backend:?}");
+            let capped = SolveOptions {
+                max_iterations: 2,
+                ..options.clone()
+            };
+            let limited = status(&hs71(), &capped);
+            assert_eq!(limited.status, SolveStatus::IterationLimit, "{backend:?}");
+            assert!(limited.statistics.iterations <= 2);
+            let timed = SolveOptions {
+                max_wall_time: Some(Duration::from_nanos(1)),
+                ..options.clone()
+            };
+            assert_eq!(status(&hs71(), &timed).status, SolveStatus::TimeLimit);
+            let diverging = status(&DenseAdProblem::new(Unbounded), &options);
+            assert_eq!(diverging.status, SolveStatus::Diverging, "{backend:?}");
+            assert!(diverging.x[0].abs() > 1e20 && diverging.statistics.iterations < 100);
+            let unreachable = SolveOptions {
+                tolerance: 1e-20,
+                ..options.clone()
+            };
+            let tight = status(&hs71(), &unreachable);
+            assert!(
+                (tight.statistics.objective - 17.014_017_3).abs() < 1e-6,
+                "{backend:?}"
+            );
+            let expected = match backend {
+                Backend::Native => SolveStatus::Acceptable,
+                Backend::Ripopt => SolveStatus::TinyStep,
+            };
+            assert_eq!(tight.status, expected);
+        }
+    }
+
     #[test]
     fn callback_sees_every_iteration_and_can_stop_the_solve() {
         let mut seen = Vec::new();

@@ -51,3 +51,62 @@ impl AdModel for Hs71 {
         g[1] = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3];
     }
 }
+
+/// min −x₀² subject to x₁ = 1, x₀ free: unbounded below (and nonconvex), the iterates run
+/// off to infinity.
+pub(crate) struct Unbounded;
+
+impl AdModel for Unbounded {
+    fn num_variables(&self) -> usize {
+        2
+    }
+    fn num_constraints(&self) -> usize {
+        1
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower.fill(f64::NEG_INFINITY);
+        upper.fill(f64::INFINITY);
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower[0] = 1.0;
+        upper[0] = 1.0;
+    }
+    fn initial_point(&self, x0: &mut [f64]) {
+        x0.copy_from_slice(&[1.0, 0.0]);
+    }
+    fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
+        -x[0] * x[0]
+    }
+    fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
+        g[0] = x[1];
+    }
+}
+
+/// min x subject to x² ≤ −1: no feasible point.
+pub(crate) struct Infeasible;
+
+impl AdModel for Infeasible {
+    fn num_variables(&self) -> usize {
+        1
+    }
+    fn num_constraints(&self) -> usize {
+        1
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower[0] = -10.0;
+        upper[0] = 10.0;
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower[0] = f64::NEG_INFINITY;
+        upper[0] = -1.0;
+    }
+    fn initial_point(&self, x0: &mut [f64]) {
+        x0[0] = 3.0;
+    }
+    fn objective<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D]) -> D {
+        x[0]
+    }
+    fn constraints<D: DualNum<Primitive = f64> + Copy>(&self, x: &[D], g: &mut [D]) {
+        g[0] = x[0] * x[0];
+    }
+}
