@@ -551,16 +551,17 @@ fn bench_plan(
     iterations.sort_unstable();
     println!(
         "\nADAM, {} variables, {} constraints, {:?} backend: median {:.2} s and {} iterations over \
-         {runs} plans (set-up, both solves and the feed-forward table); the solutions are {}",
+         {runs} plan{} (set-up, both solves and the feed-forward table); {}",
         size.0,
         size.1,
         cfg.solver.backend,
         totals[runs / 2],
         iterations[runs / 2],
-        if identical {
-            "bit-identical"
-        } else {
-            "NOT bit-identical"
+        if runs == 1 { "" } else { "s" },
+        match (runs, identical) {
+            (1, _) => "one run, no solutions to compare",
+            (_, true) => "the solutions are bit-identical",
+            (_, false) => "the solutions are NOT bit-identical",
         }
     );
     // Each phase's median over the runs (so they need not add up to the median total).
@@ -933,16 +934,21 @@ fn plan(
             phases.columns()
         );
     }
+    let factorizations: Option<Vec<String>> = planned
+        .stages
+        .iter()
+        .map(|s| s.phases.map(|p| p.factorizations.to_string()))
+        .collect();
     println!(
         "(resto: iterations in feasibility restoration; eval: problem functions and derivatives; \
-         factor: KKT assembly and LDLᵀ factorizations, {} in all; kkt sol: solves with the factors; \
-         other: the rest of the solver)",
-        planned
-            .stages
-            .iter()
-            .map(|s| s.phases.map_or("-".to_string(), |p| p.factorizations.to_string()))
-            .collect::<Vec<_>>()
-            .join(" + ")
+         factor: KKT assembly and LDLᵀ factorizations{}; kkt sol: solves with the factors; \
+         other: the rest of the solver{})",
+        factorizations.map_or(String::new(), |f| format!(", {} in all", f.join(" + "))),
+        if planned.stages.iter().any(|s| s.phases.is_none()) {
+            "; -: not measured by the ripopt backend"
+        } else {
+            ""
+        }
     );
     println!(
         "\nstep length {:.4} m | duration {:.4} s | speed {:.4} m/s | cost of transport {:.4}",
