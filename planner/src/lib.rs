@@ -7,14 +7,24 @@
 //! URDF ─▶ PlanarModel ─▶ PlanarBiped ──────┼─▶ HzdProblem (collocation, exact derivatives)
 //!                                          │        │  two solves (feasibility, then cost)
 //!                           initial guess ─┘        ▼
-//!                                     nlp::solve (ripopt, IPOPT-class interior point)
+//!                      nlp::solve (native interior point, the default; or ripopt)
 //!                                                   ▼
-//!                                         GaitFile (model::gait) + PlanReport
+//!                     PlannedGait: GaitFile (model::gait) + a StageReport per solve
+//!                                                   ▼
+//!                      verify: closed-loop orbit, Poincaré eigenvalues, consistency
 //! ```
 //!
-//! - [`nlp`]: the NLP trait and solver backend, tested on the Hock–Schittkowski collection.
+//! - [`nlp`]: the NLP trait, the native interior point and the ripopt backend, their statuses
+//!   and statistics (iterations, restoration, time by phase), tested on the Hock–Schittkowski
+//!   collection.
+//! - [`biped`]: the robot in pinned-stance coordinates, found in the URDF by the naming
+//!   convention of [`model::robot`].
 //! - [`collocation`]: the HZD gait optimization as a sparse NLP (its docs list every constraint).
+//! - [`guess`]: the hand-built first step the feasibility solve starts from.
 //! - [`plan`]: the paper's two-step solve and the gait file it writes.
+//! - [`verify`]: the independent check of a gait (`adam gait check`).
+//! - [`codesign`]: thigh and shin lengths as variables (`adam codesign`), and the convergence
+//!   study.
 //!
 //! ```no_run
 //! use planner::{config::PlannerConfig, plan::plan_gait};
