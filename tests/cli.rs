@@ -511,10 +511,12 @@ fn plan_writes_a_gait_that_gait_check_passes_and_shifted_copies_fail() {
     assert!(out.contains("stable periodic orbit"), "{out}");
 
     // Shifting the swing hip's Bézier coefficients: by 0.3 rad there is no orbit near the plan;
-    // by 0.005 rad there is a stable one with the planned joints, walked at another pace.
+    // by 0.05 rad the robot falls within a step; by 0.005 rad there is a stable orbit with the
+    // planned joints, walked at another pace.
     let text = std::fs::read_to_string(&gait).expect("gait written");
     for (shift, why) in [
         (0.3, "no periodic orbit near the planned step"),
+        (0.05, "the robot falls"),
         (0.005, "not the planned pace"),
     ] {
         let mut broken: serde_json::Value = serde_json::from_str(&text).expect("json");

@@ -15,7 +15,8 @@
 //! - Consistency: the orbit is the planned one, its joints within [`CONSISTENCY_TOLERANCE_RAD`]
 //!   of the planned post-impact state and its step duration within [`STEP_DURATION_TOLERANCE`] of
 //!   the planned one; Newton is stopped when it takes the joints more than
-//!   [`NEWTON_RADIUS_RAD`] from the plan. The report also gives one closed-loop step from the
+//!   [`NEWTON_RADIUS_RAD`] from the plan, and a simulated step is stopped as a fall when a
+//!   reduced coordinate passes half a turn. The report also gives one closed-loop step from the
 //!   planned state (the planned step as the closed loop walks it) and
 //!   [`VerifyReport::failures`] says what fails, with the figure and its limit.
 
@@ -508,6 +509,17 @@ impl ClosedLoop {
         let max_time = 5.0;
         loop {
             let next = self.rk4(&x, dt)?;
+            // A walking robot turns no joint (nor its torso) half a turn within a step: past
+            // that it has fallen, and the controller's decoupling matrix soon turns singular.
+            if let Some(i) = (0..nq).find(|&i| !below(next[i].abs(), std::f64::consts::PI)) {
+                return Err(PlannerError::Solver(format!(
+                    "the robot falls {:.3} s into a simulated step: reduced coordinate {i} \
+                     (full coordinate {}) reaches {:.2} rad",
+                    t + dt,
+                    self.biped.reduced[i],
+                    next[i]
+                )));
+            }
             let z_next = self.swing_foot(&next)?[1];
             // The guard counts once the swing foot has left the ground and comes back down.
             if t > 0.1 && z_next < 0.0 {

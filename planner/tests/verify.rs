@@ -40,6 +40,22 @@ fn shipped_gait_is_a_stable_periodic_orbit() {
     assert!(report.failures(1e-6).is_empty(), "{report}");
 }
 
+/// A 0.05 rad shift of the swing hip's Bézier coefficients makes the robot fall within the first
+/// simulated step: the check says so (a joint past half a turn) instead of simulating on until
+/// the controller's decoupling matrix turns singular with joints hundreds of radians off.
+#[test]
+fn a_gait_the_robot_falls_on_is_reported_as_a_fall() {
+    let (mut gait, robot) = load_gait_and_robot(Path::new(GAIT)).expect("loads");
+    for a in &mut gait.bezier.alpha[2] {
+        *a += 0.05;
+    }
+    let e = verify_gait(&robot, &gait, VerifyOptions::default()).expect_err("falls");
+    assert!(
+        e.to_string().contains("the robot falls") && e.to_string().contains("rad"),
+        "{e}"
+    );
+}
+
 /// A 0.005 rad shift of the swing hip's Bézier coefficients keeps the orbit's joints within
 /// 0.015 rad of the plan and the orbit stable, but the robot walks it in 0.50 s steps instead of
 /// 0.90 s: not the planned gait, and the check says so (and only that).
