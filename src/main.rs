@@ -570,7 +570,7 @@ fn bench_plan(
         v[runs / 2]
     };
     let mut evaluation: Vec<f64> = phases.iter().map(|p| p.evaluation).collect();
-    let backend: Option<Vec<[f64; 3]>> = phases.iter().map(|p| p.backend).collect();
+    let backend: Option<Vec<[f64; 3]>> = phases.iter().map(PhaseSeconds::split).collect();
     let split = match backend {
         Some(b) => {
             let column = |k: usize| median(&mut b.iter().map(|p| p[k]).collect());
@@ -974,48 +974,44 @@ fn plan(
     Ok(())
 }
 
-/// A solve's time by phase, s: evaluation, then the backend's factorizations, solves and rest
-/// (`None` where the backend does not measure them: ripopt).
-#[derive(Clone, Copy, Default)]
+/// A solve's time by phase: evaluation, s, then the backend's own split (`None` where the
+/// backend does not measure it: ripopt).
+#[derive(Clone, Copy)]
 struct PhaseSeconds {
     evaluation: f64,
-    backend: Option<[f64; 3]>,
+    backend: Option<planner::nlp::PhaseTimes>,
 }
 
 impl PhaseSeconds {
     fn of(stage: &planner::plan::StageReport) -> Self {
         Self {
             evaluation: stage.evaluation_time_s,
-            backend: stage.phases.map(|p| {
-                [
-                    p.factorization_time.as_secs_f64(),
-                    p.linear_solve_time.as_secs_f64(),
-                    p.other_time.as_secs_f64(),
-                ]
-            }),
+            backend: stage.phases,
         }
     }
 
     /// Both stages of a plan together.
     fn of_plan(stages: &[planner::plan::StageReport]) -> Self {
-        stages.iter().map(Self::of).fold(
-            Self {
-                evaluation: 0.0,
-                backend: Some([0.0; 3]),
-            },
-            |a, b| Self {
-                evaluation: a.evaluation + b.evaluation,
-                backend: a
-                    .backend
-                    .zip(b.backend)
-                    .map(|(x, y)| [x[0] + y[0], x[1] + y[1], x[2] + y[2]]),
-            },
-        )
+        let start = Self {
+            evaluation: 0.0,
+            backend: Some(Default::default()),
+        };
+        stages.iter().map(Self::of).fold(start, |a, b| Self {
+            evaluation: a.evaluation + b.evaluation,
+            backend: planner::nlp::sum_if_both(a.backend, b.backend),
+        })
+    }
+
+    /// The backend's factorization, solve and other times, s.
+    fn split(&self) -> Option<[f64; 3]> {
+        self.backend.map(|p| {
+            [p.factorization_time, p.linear_solve_time, p.other_time].map(|t| t.as_secs_f64())
+        })
     }
 
     /// The backend's three columns, 8 wide, `-` where it does not measure them.
     fn columns(&self) -> String {
-        match self.backend {
+        match self.split() {
             Some([f, s, o]) => format!("{f:>8.3} {s:>8.3} {o:>8.3}"),
             None => format!("{:>8} {:>8} {:>8}", "-", "-", "-"),
         }

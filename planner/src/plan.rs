@@ -57,11 +57,9 @@ impl StageReport {
         self.iterations += earlier.iterations;
         self.solve_time_s += earlier.solve_time_s;
         self.evaluation_time_s += earlier.evaluation_time_s;
-        self.restoration_iterations = self
-            .restoration_iterations
-            .zip(earlier.restoration_iterations)
-            .map(|(a, b)| a + b);
-        self.phases = nlp::PhaseTimes::both(self.phases, earlier.phases);
+        self.restoration_iterations =
+            nlp::sum_if_both(self.restoration_iterations, earlier.restoration_iterations);
+        self.phases = nlp::sum_if_both(self.phases, earlier.phases);
     }
 }
 

@@ -94,11 +94,19 @@ pub struct VerifyReport {
     pub step_duration_s: f64,
     /// Simulated step length, m.
     pub step_length_m: f64,
-    /// The step the gait file plans: duration, s, and length, m.
-    pub planned_step: (f64, f64),
-    /// One closed-loop step from the planned x⁺: duration, s, and length, m (the planned
-    /// step as the closed loop walks it).
-    pub step_from_plan: (f64, f64),
+    /// The step the gait file plans.
+    pub planned_step: StepFigures,
+    /// One closed-loop step from the planned x⁺: the planned step as the closed loop walks it.
+    pub step_from_plan: StepFigures,
+}
+
+/// How long and how far one step is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepFigures {
+    /// Step duration, s.
+    pub duration_s: f64,
+    /// Step length, m.
+    pub length_m: f64,
 }
 
 impl VerifyReport {
@@ -128,7 +136,7 @@ impl VerifyReport {
                 self.max_joint_difference_rad
             ));
         }
-        let planned_s = self.planned_step.0;
+        let planned_s = self.planned_step.duration_s;
         let off = (self.step_duration_s - planned_s).abs() / planned_s;
         if !below(off, STEP_DURATION_TOLERANCE) {
             failed.push(format!(
@@ -141,6 +149,18 @@ impl VerifyReport {
         }
         failed
     }
+}
+
+/// Largest difference of the joint angles (reduced coordinates 1..nq: the torso pitch, 0, is
+/// left out) between two reduced states, rad; NaN if either has a NaN there, so that the checks
+/// made with [`below`] fail on it (`f64::max` would drop the NaN).
+fn joint_distance(x: &[f64], planned: &[f64], nq: usize) -> f64 {
+    (1..nq)
+        .map(|i| (x[i] - planned[i]).abs())
+        .fold(
+            0.0,
+            |worst, d| if d.is_nan() || d > worst { d } else { worst },
+        )
 }
 
 /// `value < limit`, false for NaN: a check that cannot be computed fails.
@@ -186,10 +206,10 @@ impl fmt::Display for VerifyReport {
         writeln!(
             f,
             "step from the planned x⁺  {:.4} m in {:.4} s (planned {:.4} m in {:.4} s), |P(x⁺) − x⁺| {:.3e}",
-            self.step_from_plan.1,
-            self.step_from_plan.0,
-            self.planned_step.1,
-            self.planned_step.0,
+            self.step_from_plan.length_m,
+            self.step_from_plan.duration_s,
+            self.planned_step.length_m,
+            self.planned_step.duration_s,
             self.planned_state_residual
         )
     }
@@ -686,9 +706,7 @@ pub fn verify_gait_with(
             .ok_or_else(|| PlannerError::Solver("DP − I is singular".into()))?;
         x += dx;
         iterations += 1;
-        let away = (1..nq)
-            .map(|i| (x[i] - planned[i]).abs())
-            .fold(0.0, f64::max);
+        let away = joint_distance(x.as_slice(), &planned, nq);
         if !below(away, NEWTON_RADIUS_RAD) {
             return Err(PlannerError::Solver(format!(
                 "no periodic orbit near the planned step: Newton on the Poincaré map took the \
@@ -708,9 +726,7 @@ pub fn verify_gait_with(
         .collect();
     eigenvalues.sort_by(|a, b| b.0.hypot(b.1).total_cmp(&a.0.hypot(a.1)));
     let spectral_radius = eigenvalues.first().map_or(0.0, |e| e.0.hypot(e.1));
-    let max_joint_difference_rad = (1..nq)
-        .map(|i| (x[i] - planned[i]).abs())
-        .fold(0.0, f64::max);
+    let max_joint_difference_rad = joint_distance(x.as_slice(), &planned, nq);
     Ok(VerifyReport {
         fixed_point_residual: residual,
         newton_iterations: iterations,
@@ -721,8 +737,14 @@ pub fn verify_gait_with(
         max_output_error_rad: step.max_output_error_rad,
         step_duration_s: step.duration_s,
         step_length_m: step.length_m,
-        planned_step: (gait.step_duration_s, gait.step_length_m),
-        step_from_plan: (from_plan.duration_s, from_plan.length_m),
+        planned_step: StepFigures {
+            duration_s: gait.step_duration_s,
+            length_m: gait.step_length_m,
+        },
+        step_from_plan: StepFigures {
+            duration_s: from_plan.duration_s,
+            length_m: from_plan.length_m,
+        },
     })
 }
 
@@ -752,4 +774,25 @@ pub fn load_gait_and_robot(gait_path: &std::path::Path) -> Result<(GaitFile, Pla
     }
     let model = PlanarModel::from_urdf_str(&text, &urdf_path.display().to_string())?;
     Ok((gait, model))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{below, joint_distance};
+
+    /// The joint distance leaves the torso pitch out, takes the worst joint, and carries a NaN
+    /// through (where `fold(0.0, f64::max)` would return the other joints' worst), so that a
+    /// check on it fails.
+    #[test]
+    fn the_joint_distance_is_the_worst_joint_and_keeps_a_nan() {
+        let planned = [0.0, 0.1, 0.2, 0.3];
+        assert_eq!(
+            joint_distance(&[5.0, 0.1, 0.25, 0.3], &planned, 4),
+            0.25 - 0.2
+        );
+        let nan_first = joint_distance(&[0.0, f64::NAN, 0.9, 0.3], &planned, 4);
+        let nan_last = joint_distance(&[0.0, 0.1, 0.9, f64::NAN], &planned, 4);
+        assert!(nan_first.is_nan() && nan_last.is_nan());
+        assert!(!below(nan_first, 0.5) && !below(nan_last, 0.5));
+    }
 }

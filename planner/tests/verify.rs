@@ -29,14 +29,20 @@ fn shipped_gait_is_a_stable_periodic_orbit() {
     // One closed-loop step from the planned x⁺ is the planned step: 0.9001 s against 0.8999 s,
     // 0.1503 m against 0.1500 m (the collocation error of N = 20; the fixed point, which that
     // error moves by 1/(1 − |λ|max), steps in 0.991 s, within STEP_DURATION_TOLERANCE).
-    let (planned_s, planned_m) = report.planned_step;
+    let planned = report.planned_step;
     assert_eq!(
-        report.planned_step,
+        (planned.duration_s, planned.length_m),
         (gait.step_duration_s, gait.step_length_m)
     );
-    let (from_plan_s, from_plan_m) = report.step_from_plan;
-    assert!((from_plan_s / planned_s - 1.0).abs() < 1e-3, "{report}");
-    assert!((from_plan_m - planned_m).abs() < 1e-3, "{report}");
+    let walked = report.step_from_plan;
+    assert!(
+        (walked.duration_s / planned.duration_s - 1.0).abs() < 1e-3,
+        "{report}"
+    );
+    assert!(
+        (walked.length_m - planned.length_m).abs() < 1e-3,
+        "{report}"
+    );
     assert!(report.failures(1e-6).is_empty(), "{report}");
 }
 

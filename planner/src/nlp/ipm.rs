@@ -4,7 +4,7 @@
 // index loops say that more plainly than zipped iterators.
 #![allow(clippy::needless_range_loop)]
 
-use super::kkt::KktSystem;
+use super::kkt::{KktStats, KktSystem};
 use super::restoration::Restoration;
 use super::solver::{
     EvaluationCounts, IterationControl, IterationReport, NlpSolver, PhaseTimes, Result, Solution,
@@ -290,9 +290,13 @@ struct Ipm<'a> {
     paired_trials: usize,
     twin_accepted: usize,
     iterations: usize,
-    /// Factorizations, solves and their wall times, a restoration phase's included (the
-    /// `other_time` is derived at the end).
-    phases: PhaseTimes,
+    /// Wall time of this solve's KKT assemblies and factorizations (every inertia trial, two
+    /// at once counting once, and the least-squares multiplier estimate's). Their count, and
+    /// the solves, are in `kkt`'s and `twin`'s statistics.
+    factorization_time: Duration,
+    /// The restoration phases' work (their own `other_time` left out: it is part of this
+    /// solve's, derived at the end).
+    restoration_phases: PhaseTimes,
     /// Iterations inside restoration phases.
     restoration_iterations: usize,
     /// False inside a restoration phase (which has none of its own).
@@ -350,7 +354,8 @@ impl<'a> Ipm<'a> {
             paired_trials: 0,
             twin_accepted: 0,
             iterations: 0,
-            phases: PhaseTimes::default(),
+            factorization_time: Duration::ZERO,
+            restoration_phases: PhaseTimes::default(),
             restoration_iterations: 0,
             allow_restoration: true,
             exit_test: None,
@@ -665,8 +670,12 @@ impl<'a> Ipm<'a> {
             }
         }
         let Some(kkt) = self.kkt.as_mut() else { return };
+        let t = Instant::now();
         kkt.assemble(&zero_hess, &self.jac, &primal, &dual, &self.fixed);
-        let Some(inertia) = kkt.factorize() else {
+        let factorized = kkt.factorize();
+        // A factorization like the iterations' (counted in `kkt`'s statistics): timed with them.
+        self.factorization_time += t.elapsed();
+        let Some(inertia) = factorized else {
             return;
         };
         if inertia.positive != n || inertia.negative != m {
@@ -868,7 +877,6 @@ impl<'a> Ipm<'a> {
                     let (ra, rb) =
                         rayon::join(|| trial(kkt, diagonals), || trial(twin, next_diagonals));
                     trials += 2;
-                    self.phases.factorizations += 2;
                     self.paired_trials += 1;
                     if correct(ra) {
                         return Some(self.accept_delta_w(delta_w));
@@ -883,7 +891,6 @@ impl<'a> Ipm<'a> {
                 }
                 _ => {
                     trials += 1;
-                    self.phases.factorizations += 1;
                     if correct(trial(kkt, diagonals)) {
                         return Some(self.accept_delta_w(delta_w));
                     }
@@ -968,11 +975,7 @@ impl<'a> Ipm<'a> {
                     0.0
                 };
         }
-        let t = Instant::now();
-        let sol = self.kkt.as_mut()?.solve(&rhs, REFINEMENTS);
-        self.phases.linear_solve_time += t.elapsed();
-        self.phases.linear_solves += 1;
-        let sol = sol?;
+        let sol = self.kkt.as_mut()?.solve(&rhs, REFINEMENTS)?;
         let mut d = Direction {
             x: sol[..n].to_vec(),
             y: sol[n..].to_vec(),
@@ -1165,7 +1168,7 @@ impl<'a> Ipm<'a> {
             let (sx, ss) = self.sigmas();
             let t = Instant::now();
             let factorized = self.factorize(&sx, &ss);
-            self.phases.factorization_time += t.elapsed();
+            self.factorization_time += t.elapsed();
             let Some(delta_w) = factorized else {
                 return SolveStatus::NumericalError;
             };
@@ -1433,19 +1436,13 @@ impl<'a> Ipm<'a> {
         let stats = solution.statistics;
         self.prob.time += stats.evaluation_time;
         if let Some(p) = stats.phases {
-            // Its other time stays in this solve's, which is derived at the end.
-            self.phases += PhaseTimes {
+            self.restoration_phases += PhaseTimes {
                 other_time: Duration::ZERO,
                 ..p
             };
         }
         self.restoration_iterations += stats.iterations;
-        let counts = &mut self.prob.counts;
-        counts.objective += stats.evaluation_counts.objective;
-        counts.gradient += stats.evaluation_counts.gradient;
-        counts.constraints += stats.evaluation_counts.constraints;
-        counts.jacobian += stats.evaluation_counts.jacobian;
-        counts.hessian += stats.evaluation_counts.hessian;
+        self.prob.counts += stats.evaluation_counts;
         // The restoration's iterations (reported with `restoration: true`), and its return to
         // the outer problem as one more (so the callback's numbers keep increasing).
         *iteration += stats.iterations + 1;
@@ -1628,35 +1625,43 @@ impl<'a> Ipm<'a> {
             self.errors(0.0)
         };
         let total = start.elapsed();
-        if self.options.print_level >= 5 {
-            if let Some(k) = &self.kkt {
-                let mut st = k.stats;
-                if let Some(t) = &self.twin {
-                    st += t.stats;
-                }
-                eprintln!(
-                    "kkt: {} factorizations {:?} ({} not finite, {} by feral; {} pairs at once, {} decided by the second), {} solves ({} refinement corrections) {:?}; total {:?}, eval {:?}",
-                    st.factorizations,
-                    st.factorization_time,
-                    st.nonfinite,
-                    st.fallbacks,
-                    self.paired_trials,
-                    self.twin_accepted,
-                    st.solves,
-                    st.corrections,
-                    st.solve_time,
-                    total,
-                    self.prob.time
-                );
-            }
+        // The work of both KKT systems (a trial the twin decided swapped them).
+        let kkt =
+            [&self.kkt, &self.twin]
+                .into_iter()
+                .flatten()
+                .fold(KktStats::default(), |mut st, k| {
+                    st += k.stats;
+                    st
+                });
+        if self.options.print_level >= 5 && self.kkt.is_some() {
+            eprintln!(
+                "kkt: {} factorizations {:?} ({} not finite, {} by feral; {} pairs at once, {} decided by the second), {} solves ({} refinement corrections) {:?}; total {:?}, eval {:?}",
+                kkt.factorizations,
+                kkt.factorization_time,
+                kkt.nonfinite,
+                kkt.fallbacks,
+                self.paired_trials,
+                self.twin_accepted,
+                kkt.solves,
+                kkt.corrections,
+                kkt.solve_time,
+                total,
+                self.prob.time
+            );
         }
         let lambda = (0..m).map(|i| self.y[i] * self.prob.sg[i] / sf).collect();
         let solver_time = total.saturating_sub(self.prob.time);
-        let phases = PhaseTimes {
-            other_time: solver_time
-                .saturating_sub(self.phases.factorization_time + self.phases.linear_solve_time),
-            ..self.phases
+        let mut phases = PhaseTimes {
+            factorizations: kkt.factorizations,
+            factorization_time: self.factorization_time,
+            linear_solves: kkt.solves,
+            linear_solve_time: kkt.solve_time,
+            other_time: Duration::ZERO,
         };
+        phases += self.restoration_phases;
+        phases.other_time =
+            solver_time.saturating_sub(phases.factorization_time + phases.linear_solve_time);
         Solution {
             status,
             constraint_values: g,
@@ -2114,9 +2119,10 @@ mod tests {
         assert!(restoring > 0);
         assert!(reports.windows(2).all(|w| w[1].iteration > w[0].iteration));
         assert_eq!(reports.last().unwrap().iteration, s.statistics.iterations);
-        // The statistics name the restoration iterations, and its factorizations are counted:
-        // one or more per iteration, but for the return from each restoration (one iteration
-        // more, with no factorization of its own).
+        // The statistics name the restoration iterations. Every iteration that steps, outer or
+        // restoration, factorizes at least once; the return from each restoration counts one
+        // iteration more with no factorization of its own. (A lower bound: it does not tell
+        // the restoration's own factorizations from the outer ones.) The phases are disjoint.
         assert_eq!(s.statistics.restoration_iterations, Some(restoring));
         let entries = reports
             .windows(2)

@@ -140,7 +140,7 @@ pub use ipm::NativeSolver;
 pub use problem::{DomainError, NlpProblem, SparsityPattern};
 pub use ripopt_backend::RipoptSolver;
 pub use solver::{
-    solve, solve_with_callback, Backend, EvaluationCounts, IterationControl, IterationReport,
-    NlpError, NlpSolver, PhaseTimes, Result, Solution, SolveOptions, SolveStatistics, SolveStatus,
-    WarmStart,
+    solve, solve_with_callback, sum_if_both, Backend, EvaluationCounts, IterationControl,
+    IterationReport, NlpError, NlpSolver, PhaseTimes, Result, Solution, SolveOptions,
+    SolveStatistics, SolveStatus, WarmStart,
 };

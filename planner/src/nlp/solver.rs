@@ -257,7 +257,8 @@ pub struct SolveStatistics {
 /// times (two inertia-correction trials factorized at once count once).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct PhaseTimes {
-    /// KKT matrices assembled and factorized, every inertia-correction trial included.
+    /// KKT matrices assembled and factorized: every inertia-correction trial and the
+    /// least-squares estimate of the multipliers at the start (and after a restoration).
     pub factorizations: usize,
     /// Wall time of those assemblies and factorizations.
     pub factorization_time: Duration,
@@ -281,13 +282,12 @@ impl std::ops::AddAssign for PhaseTimes {
     }
 }
 
-impl PhaseTimes {
-    /// The phases of two solves together, if both measured them.
-    pub fn both(a: Option<Self>, b: Option<Self>) -> Option<Self> {
-        let (mut a, b) = (a?, b?);
-        a += b;
-        Some(a)
-    }
+/// The sum of a figure of two solves, if both measured it (`None` if either did not: the
+/// restoration iterations or the phases of a solve that ran partly on ripopt).
+pub fn sum_if_both<T: std::ops::AddAssign>(a: Option<T>, b: Option<T>) -> Option<T> {
+    let (mut a, b) = (a?, b?);
+    a += b;
+    Some(a)
 }
 
 impl SolveStatistics {
@@ -296,20 +296,13 @@ impl SolveStatistics {
     /// them.
     pub fn absorb(&mut self, earlier: &SolveStatistics) {
         self.iterations += earlier.iterations;
-        self.restoration_iterations = self
-            .restoration_iterations
-            .zip(earlier.restoration_iterations)
-            .map(|(a, b)| a + b);
-        let (c, e) = (&mut self.evaluation_counts, &earlier.evaluation_counts);
-        c.objective += e.objective;
-        c.gradient += e.gradient;
-        c.constraints += e.constraints;
-        c.jacobian += e.jacobian;
-        c.hessian += e.hessian;
+        self.restoration_iterations =
+            sum_if_both(self.restoration_iterations, earlier.restoration_iterations);
+        self.evaluation_counts += earlier.evaluation_counts;
         self.evaluation_time += earlier.evaluation_time;
         self.solver_time += earlier.solver_time;
         self.total_time += earlier.total_time;
-        self.phases = PhaseTimes::both(self.phases, earlier.phases);
+        self.phases = sum_if_both(self.phases, earlier.phases);
     }
 }
 
@@ -326,6 +319,17 @@ pub struct EvaluationCounts {
     pub jacobian: usize,
     /// `hessian_values` calls.
     pub hessian: usize,
+}
+
+impl std::ops::AddAssign for EvaluationCounts {
+    /// Adds the calls of another solve (a restoration phase's, or an earlier solve's).
+    fn add_assign(&mut self, other: Self) {
+        self.objective += other.objective;
+        self.gradient += other.gradient;
+        self.constraints += other.constraints;
+        self.jacobian += other.jacobian;
+        self.hessian += other.hessian;
+    }
 }
 
 /// The outcome of a solve: the last iterate, its multipliers and how it ended.
