@@ -10,8 +10,13 @@
 //! | [`timing`] | CAN bus time of A1 traffic; `validate(rate, motors per bus, bitrate)` |
 //! | [`bus`] | the [`bus::MotorBus`] trait: configure → activate → exchange → deactivate, `Drop` = damping |
 //! | [`socketcan_bus`] | `MotorBus` on Linux SocketCAN, one interface per limb |
-//! | [`sim_bus`] | `MotorBus` on simulated A1 firmware and a pluggable [`sim_bus::JointPlant`]; seeded wire faults (loss, corruption, delay) and motor faults (silent, hot, error flags) |
-//! | [`sim`] | the planar ADAM on a treadmill (optional boom): point-foot contact, impacts, falls, ground truth; a `JointPlant`; pushes, belt steps, IMU faults |
+//! | [`sim`] | the simulated hardware, a room per concern: |
+//! | [`sim::bus`] | [`sim::bus::SimBus`]: `MotorBus` on simulated A1 firmware and a pluggable [`sim::plant::JointPlant`]; frames in, replies out, exact bus time; motor faults (silent, hot, error flags) |
+//! | [`sim::firmware`] | the A1 firmware model: encoder, PD at 10 kHz, torque–speed envelope, heat, lifecycle |
+//! | [`sim::wire`] | seeded wire faults (loss, corruption, delay), their counts, a frame recorder |
+//! | [`sim::plant`] | the `JointPlant` trait and independent rigid joints |
+//! | [`sim::robot`] | the rigid-body plant: the planar ADAM on a treadmill (optional boom): point-foot contact, impacts, falls, ground truth; a `JointPlant`; pushes, belt steps, IMU faults |
+//! | [`sim_bus`] | the old paths of `SimBus` and its parts, now in [`sim`] (issue #26; removed at the merge) |
 //! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force), a seeded noise model and [`imu::ImuFault`] (dropout, spike, frozen) |
 //! | [`conformance`] | the checks every `MotorBus` must pass |
 //!
@@ -21,17 +26,17 @@
 //!                                                                              │
 //!            SocketCanBus: write to can0..can3 ◀──────────────────────────────┤
 //!            SimBus: simulated firmware decodes, runs PD at 10 kHz on the JointPlant
-//!                    JointPlant = sim::RobotSim: 4 leg joints (hip, knee ×2) of the planar
+//!                    JointPlant = sim::robot::RobotSim: 4 leg joints (hip, knee ×2) of the planar
 //!                    ADAM; D(q), H from `model`; stance/flight/impact at 10 kHz ──▶ ground truth,
 //!                    events (touchdown, liftoff, fall), Imu::read (noisy pitch rate, accel)
 //!                                                                              │
 //! controller ◀── &mut [Reply] ◀── a1::decode_reply ◀── reply frames ◀──────────┘
 //! ```
-//! Nothing in `exchange` allocates, with the test plants or with [`sim::RobotSim`]
+//! Nothing in `exchange` allocates, with the test plants or with [`sim::robot::RobotSim`]
 //! (`tests/no_alloc.rs`). The caller sizes the command and reply slices once.
 //!
 //! With `SimBus<RobotSim>`, configure only the four simulated leg motors
-//! ([`sim::RobotSim::leg_motors`]). ADAM's other ten motors (hip yaw/roll, arms) have no joint
+//! ([`sim::robot::RobotSim::leg_motors`]). ADAM's other ten motors (hip yaw/roll, arms) have no joint
 //! in the planar model (their mass is lumped into the torso): a `SimBus` has no firmware for
 //! them, so naming one in `configure` makes `activate` fail with `MissingReply` for it, exactly
 //! like an unplugged motor.

@@ -1,5 +1,5 @@
 //! Seeded Gaussian noise: the one standard-normal sampler of the simulated sensors (the A1
-//! encoders in [`crate::sim_bus`], the IMU in [`crate::imu`]).
+//! encoders in [`crate::sim::firmware`], the IMU in [`crate::imu`]).
 //!
 //! The Ziggurat method of `rand_distr` (one 64-bit draw and a table lookup for 99 % of the
 //! samples): the encoders draw one sample per motor per 10 kHz firmware tick, where Box–Muller

@@ -19,7 +19,8 @@
 //! After five equal bits the transmitter inserts one opposite *stuff bit*. Over the
 //! `34 + 8n` stuffed bits the worst case is `⌊(34 + 8n − 1) / 4⌋` stuff bits (the first
 //! run needs five bits, each later one four, because a stuff bit starts the next run).
-//! [`frame_bits_exact`] instead counts the stuff bits of an actual frame, CRC included.
+//! [`frame_bits_exact`] instead counts the stuff bits of an actual frame, CRC included. The
+//! simulated bus ([`crate::sim::bus::SimBus`]) charges every frame it carries with it.
 //!
 //! | at 1 Mbit/s, n = 8 | bits | time |
 //! |---|---|---|
