@@ -9,8 +9,10 @@ mod common;
 use core::time::Duration;
 use drivers::a1::{Command, MotorId, Reply};
 use drivers::bus::{MotorBus, MotorSpec};
-use drivers::sim::{RobotSimConfig, SimEvent};
-use drivers::sim_bus::{A1Model, InertiaDampingPlant, RigidJoint, SimBus, SimConfig, SimMotor};
+use drivers::sim::bus::{SimBus, SimConfig};
+use drivers::sim::firmware::{A1Model, SimMotor};
+use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
+use drivers::sim::robot::{RobotSimConfig, SimEvent};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 

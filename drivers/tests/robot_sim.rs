@@ -1,4 +1,4 @@
-//! The simulated ADAM (`drivers::sim`): falls, standing through SimBus and the CAN codec,
+//! The simulated ADAM (`drivers::sim::robot`): falls, standing through SimBus and the CAN codec,
 //! contact and impact properties, treadmill, boom, IMU and determinism.
 #![allow(clippy::unwrap_used, clippy::needless_range_loop)]
 
@@ -6,10 +6,12 @@ use core::time::Duration;
 use drivers::a1::{Command, Reply};
 use drivers::bus::MotorBus;
 use drivers::imu::{Imu, ImuNoise, ImuSample};
-use drivers::sim::{
+use drivers::sim::bus::{SimBus, SimConfig};
+use drivers::sim::firmware::A1Model;
+use drivers::sim::plant::JointPlant;
+use drivers::sim::robot::{
     Boom, Contact, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent, PENETRATION_TOLERANCE_M,
 };
-use drivers::sim_bus::{A1Model, JointPlant, SimBus, SimConfig};
 use model::{PlanarModel, Side};
 
 const PERIOD: Duration = Duration::from_millis(1);

@@ -6,9 +6,10 @@ use core::time::Duration;
 use drivers::a1::{Frame, MotorId};
 use drivers::bus::MotorSpec;
 use drivers::conformance::{Harness, HoldCheck};
-use drivers::sim_bus::{
-    A1Model, Direction, InertiaDampingPlant, RigidJoint, SimBus, SimConfig, SimMotor, WireTap,
-};
+use drivers::sim::bus::{SimBus, SimConfig};
+use drivers::sim::firmware::{A1Model, SimMotor};
+use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
+use drivers::sim::wire::{Direction, WireTap};
 
 const LOAD_NM: f64 = 3.0;
 

@@ -1,14 +1,14 @@
 //! The multi-rate simulator (`D`, `H`, their factor and the contact operator held for
 //! `dynamics_refresh_substeps` steps, the default) against the exact path (everything evaluated
 //! every step), both behind `SimBus` with the same seed: PD-held standing, and marching in place
-//! with liftoffs and touchdowns. See `drivers::sim`, "Multi-rate dynamics".
+//! with liftoffs and touchdowns. See `drivers::sim::robot`, "Multi-rate dynamics".
 #![allow(clippy::unwrap_used)]
 
 mod common;
 
 use drivers::a1::Command;
-use drivers::sim::{RobotSimConfig, SimEvent, PENETRATION_TOLERANCE_M};
-use drivers::sim_bus::JointPlant;
+use drivers::sim::plant::JointPlant;
+use drivers::sim::robot::{RobotSimConfig, SimEvent, PENETRATION_TOLERANCE_M};
 
 /// The state at one control tick: joints \[rad\], torso (x, z) \[m\] and pitch \[rad\].
 struct Sample {

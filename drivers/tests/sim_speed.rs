@@ -9,7 +9,7 @@
 mod common;
 
 use drivers::a1::Command;
-use drivers::sim::RobotSimConfig;
+use drivers::sim::robot::RobotSimConfig;
 use std::time::Instant;
 
 /// Simulated and wall-clock seconds and seconds on a CPU (if known) of one 1.5 s run.
@@ -28,7 +28,7 @@ fn run(march: bool) -> (f64, f64, Option<f64>) {
         .map(|(a, b)| b.saturating_sub(a) as f64 * 1e-9);
     let plant = bus.plant();
     assert!(plant.fallen().is_none(), "{:?}", plant.fallen());
-    assert!(plant.max_penetration_m() <= drivers::sim::PENETRATION_TOLERANCE_M);
+    assert!(plant.max_penetration_m() <= drivers::sim::robot::PENETRATION_TOLERANCE_M);
     (bus.time_s(), wall_s, cpu_s)
 }
 

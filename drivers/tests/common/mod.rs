@@ -6,8 +6,10 @@
 use core::time::Duration;
 use drivers::a1::{Command, Reply};
 use drivers::bus::MotorBus;
-use drivers::sim::{LegJoint, RobotSim, RobotSimConfig};
-use drivers::sim_bus::{A1Model, JointPlant, SimBus, SimConfig, SimMotor};
+use drivers::sim::bus::{SimBus, SimConfig};
+use drivers::sim::firmware::{A1Model, SimMotor};
+use drivers::sim::plant::JointPlant;
+use drivers::sim::robot::{LegJoint, RobotSim, RobotSimConfig};
 use model::Side;
 
 /// An active bus over the standing robot, and what the tests command it with.
