@@ -195,7 +195,7 @@ impl ExchangeReport {
 
 /// A set of A1 motors behind one or more CAN buses, with a safe lifecycle.
 ///
-/// Implementations: [`crate::sim_bus::SimBus`] (simulated firmware behind the real codec)
+/// Implementations: [`crate::sim::bus::SimBus`] (simulated firmware behind the real codec)
 /// and [`crate::socketcan_bus::SocketCanBus`] (Linux SocketCAN). Both pass
 /// [`crate::conformance`].
 pub trait MotorBus {
