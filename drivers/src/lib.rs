@@ -12,7 +12,7 @@
 //! | [`socketcan_bus`] | `MotorBus` on Linux SocketCAN, one interface per limb |
 //! | [`sim_bus`] | `MotorBus` on simulated A1 firmware and a pluggable [`sim_bus::JointPlant`]; seeded wire faults (loss, corruption, delay) and motor faults (silent, hot, error flags) |
 //! | [`sim`] | the planar ADAM on a treadmill (optional boom): point-foot contact, impacts, falls, ground truth; a `JointPlant`; pushes, belt steps, IMU faults |
-//! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force), a seeded noise model and [`imu::ImuFault`] (dropout, spike, frozen) |
+//! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force) the simulator and the runtime share, a seeded noise model and [`imu::ImuFault`] (dropout, spike, frozen) |
 //! | [`conformance`] | the checks every `MotorBus` must pass |
 //!
 //! ## Data flow of one control cycle

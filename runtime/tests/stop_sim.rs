@@ -8,9 +8,9 @@
 
 use drivers::sim::SimEvent;
 use model::Side;
-use runtime::controller::{ControlState, OperatorCommand};
+use runtime::control::{ControlState, OperatorCommand};
 use runtime::rt_loop::{LoopOptions, SimulatedClock};
-use runtime::sim_run::{sim_backend, SimWalkOptions};
+use runtime::sim::run::{sim_backend, SimWalkOptions};
 use runtime::Setup;
 
 /// Walks from the planned state, says Stop at `stop_at_s`, runs to `end_s`; checks the robot

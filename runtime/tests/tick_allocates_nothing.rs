@@ -9,7 +9,7 @@
 #![allow(unsafe_code)]
 
 use runtime::config::PhaseSource;
-use runtime::controller::{CommandMode, ControlState, OperatorCommand, TickInput, TickOutput};
+use runtime::control::{CommandMode, ControlState, OperatorCommand, TickInput, TickOutput};
 use runtime::estimator::GRAVITY_MPS2;
 use runtime::{ImuSample, Setup};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -82,7 +82,7 @@ fn walk_without_allocating(phase: PhaseSource) {
             input.t_s = f64::from(k) * 1e-3;
             input.imu = Some(ImuSample {
                 t_s: input.t_s,
-                gyro_pitch_rad_s: 0.001 + runtime::io::test_dither_rad_s(input.t_s),
+                gyro_pitch_rad_s: 0.001 + runtime::backend::test_dither_rad_s(input.t_s),
                 accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
                 accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
             });
@@ -134,5 +134,5 @@ fn the_counter_sees_allocations() {
 #[test]
 fn controller_is_owned_plain_data() {
     fn owned<T: Send + Sync + Clone + 'static>() {}
-    owned::<runtime::controller::Controller>();
+    owned::<runtime::control::Controller>();
 }

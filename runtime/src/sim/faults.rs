@@ -9,7 +9,7 @@
 //! * `random`: faults drawn from a list at exponentially distributed intervals (the soak).
 //!
 //! [`FaultProfile::schedule`] turns the events and the random part into one time-sorted list
-//! for a run — pure and seeded: the same seed gives the same schedule. [`crate::sim_run`]
+//! for a run — pure and seeded: the same seed gives the same schedule. [`crate::sim::run`]
 //! applies it while the loop runs. Built-in profiles have names ([`BUILT_IN`]); anything else is
 //! read as a TOML file:
 //!

@@ -10,7 +10,7 @@
 //! Frames: positions are world axes `[x, z]`, relative to the stance foot. Everything here
 //! works on fixed-size arrays and never allocates.
 
-use crate::controller::LEG_SLOTS;
+use crate::slots::LEG_SLOTS;
 use model::robot::{Legs, PlanarModel, Side, MAX_DOF};
 
 /// Torso origin x, z (m) and pitch (rad), relative to the stance foot.

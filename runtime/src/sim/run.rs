@@ -1,6 +1,6 @@
 //! The runtime on the simulated ADAM: [`drivers::sim::RobotSim`] as the [`JointPlant`](drivers::sim_bus::JointPlant) behind a
 //! [`SimBus`] (every command and reply goes through the A1 CAN codec and the simulated firmware),
-//! its torso IMU as the runtime's [`crate::Imu`], on a treadmill, under a simulated clock.
+//! its torso IMU as the drivers' [`Imu`], on a treadmill, under a simulated clock.
 //!
 //! ```text
 //! gait file initial_state (q⁺, q̇⁺) ─▶ RobotSim (belt = gait speed) ─▶ SimBus<RobotSim>
@@ -11,7 +11,7 @@
 //!
 //! # Faults and the soak
 //! With [`SimWalkOptions::faults`] the backend is a [`FaultySim`]: before each exchange it starts
-//! and ends the faults of the profile's seeded schedule ([`crate::faults`]) at simulated time —
+//! and ends the faults of the profile's seeded schedule ([`crate::sim::faults`]) at simulated time —
 //! wire faults in the [`SimBus`], motor faults in its firmware, pushes, belt steps and IMU
 //! faults in the [`RobotSim`] — and a [`FaultClock`] wakes the loop late during overrun faults.
 //! Applying a fault allocates nothing (the schedule is built before the loop).
@@ -25,14 +25,14 @@
 //! `runtime/tests/stand_sim.rs`): its first steps are quicker and converge to the orbit over
 //! some 20 steps.
 
-use crate::faults::{Fault, FaultProfile, ScheduledFault};
-use crate::io::Imu;
+use crate::backend::Backend;
 use crate::rt_loop::{Clock, LoopOptions, MonotonicClock, RunSummary};
+use crate::sim::faults::{Fault, FaultProfile, ScheduledFault};
 use crate::{Result, RuntimeError, Setup};
 use core::time::Duration;
 use drivers::a1::{Command, ErrorFlags, MotorId, Reply};
 use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
-use drivers::imu::{ImuFault, ImuNoise};
+use drivers::imu::{Imu, ImuError, ImuFault, ImuNoise, ImuSample};
 use drivers::sim::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
 use drivers::sim_bus::{A1Model, SimBus, SimConfig, SimMotor, WireStats};
 use model::Side;
@@ -126,26 +126,17 @@ impl SimWalkReport {
         self.summary
             .transitions
             .iter()
-            .find(|(_, _, to)| *to == crate::controller::ControlState::Damping)
+            .find(|(_, _, to)| *to == crate::control::ControlState::Damping)
             .map(|(t, _, _)| *t)
     }
 }
 
-/// The runtime's IMU on the simulator's torso IMU (attached with [`RobotSim::attach_imu`]);
-/// stamped with the loop time, since the simulator has just stepped to it.
-impl Imu for RobotSim {
-    fn read_imu(&mut self, t_s: f64) -> Option<crate::ImuSample> {
-        let mut s = drivers::imu::ImuSample::default();
-        drivers::imu::Imu::read(self, &mut s).ok()?;
-        Some(crate::ImuSample {
-            t_s,
-            gyro_pitch_rad_s: s.gyro_pitch_rad_s,
-            accel_x_mps2: s.accel_x_mps2,
-            accel_z_mps2: s.accel_z_mps2,
-        })
-    }
+/// The simulated robot behind its bus: the drivers' IMU on the simulator's torso (attached
+/// with [`RobotSim::attach_imu`]), stamped with the loop time since the simulator has just
+/// stepped to it; and the true torso pitch.
+impl Backend for SimBus<RobotSim> {
     fn true_pitch_rad(&self) -> Option<f64> {
-        Some(self.torso_pitch_rad())
+        Some(self.plant().torso_pitch_rad())
     }
 }
 
@@ -483,9 +474,15 @@ impl MotorBus for FaultySim {
 }
 
 impl Imu for FaultySim {
-    fn read_imu(&mut self, t_s: f64) -> Option<crate::ImuSample> {
-        self.bus.read_imu(t_s)
+    fn read(&mut self, out: &mut ImuSample) -> core::result::Result<(), ImuError> {
+        self.bus.read(out)
     }
+    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
+        self.bus.read_at(t_s)
+    }
+}
+
+impl Backend for FaultySim {
     fn true_pitch_rad(&self) -> Option<f64> {
         self.bus.true_pitch_rad()
     }
@@ -809,9 +806,13 @@ impl std::fmt::Display for SimWalkReport {
 pub fn joint_bench_backend(
     setup: &Setup,
     start_rad: &[f64],
-    imu: crate::io::StaticImu,
-) -> Result<crate::io::WithImu<SimBus<drivers::sim_bus::InertiaDampingPlant>, crate::io::StaticImu>>
-{
+    imu: crate::backend::StaticImu,
+) -> Result<
+    crate::backend::WithImu<
+        SimBus<drivers::sim_bus::InertiaDampingPlant>,
+        crate::backend::StaticImu,
+    >,
+> {
     use drivers::sim_bus::{InertiaDampingPlant, RigidJoint};
     let joint = RigidJoint {
         inertia_kg_m2: 0.05,
@@ -840,7 +841,7 @@ pub fn joint_bench_backend(
         model: A1Model::default(),
         seed: 7,
     };
-    Ok(crate::io::WithImu {
+    Ok(crate::backend::WithImu {
         bus: SimBus::new(config, plant).map_err(|e| invalid(format!("joint bench bus: {e}")))?,
         imu,
     })
