@@ -18,7 +18,7 @@
 //! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info\|recover`, joint series); deterministic [`telemetry::replay`] (`adam replay`, fixtures) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
-//! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, fault injection, the soak) and fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) |
+//! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]) |
 //!
 //! ## Data flow of one tick
 //! ```text

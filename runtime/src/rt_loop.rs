@@ -1,10 +1,10 @@
 //! The loop driver: runs the [`Controller`] at a fixed rate on its own thread, against any
-//! backend that is a [`MotorBus`] and an [`Imu`] (SimBus, SocketCAN + IMU, replay).
+//! [`Backend`]: a `MotorBus` and an `Imu` (SimBus, SocketCAN + IMU, replay).
 //!
 //! One period:
 //! ```text
 //! exchange(commands of the last tick) → replies ─┐     (one tick of command latency)
-//! read_imu(t) ───────────────────────────────────┤
+//! read_at(t) (the IMU) ──────────────────────────┤
 //! operator: script entry due, else ring poll ────┴─▶ Controller::tick ─▶ commands
 //!                                                      └─▶ StateSample ─▶ iceoryx2 + log queue
 //! sleep until the absolute deadline t0 + (k+1)·T; late → overrun (streak feeds the safety monitor)

@@ -1,7 +1,7 @@
 //! `Controller::tick` allocates nothing: a counting global allocator watches this test
 //! thread over thousands of ticks through Ramp, Stand, Walk (its launch in double support,
 //! both phase sources, stance switches included), Stop (the braking step) and Stand again. No locks: by construction `Controller` owns only plain data (no `Mutex`,
-//! `RwLock`, channel or `Arc` in `controller.rs`, `estimator.rs`, `safety.rs`);
+//! `RwLock`, channel or `Arc` in `control/`, `estimator.rs`, `safety.rs`);
 //! `controller_is_owned_plain_data` checks it is `'static + Clone + Send + Sync` (no borrowed
 //! shared state).
 
