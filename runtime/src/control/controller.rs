@@ -49,7 +49,10 @@
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
-use super::transitions::*;
+use super::transitions::{
+    braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
+    MIN_JERK_PEAK_RATE, PLANNED_PITCH_SIGMA_RAD, STAND_DELAY_S,
+};
 use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
 use crate::estimator::{EstimatorParams, PitchEstimator};
 use crate::safety::{SafetyInput, SafetyMonitor, Trip};

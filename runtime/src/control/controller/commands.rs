@@ -6,7 +6,10 @@ use super::Controller;
 use crate::control::double_support::{self, Geometry};
 use crate::control::gait_table::side_index;
 use crate::control::tick::{CommandMode, JointCommand};
-use crate::control::transitions::*;
+use crate::control::transitions::{
+    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP,
+    LAUNCH_REACH_FRACTION, LAUNCH_SPEED_MPS,
+};
 use crate::slots::{LEG_SLOTS, OUTPUTS, SLOTS};
 
 impl Controller {

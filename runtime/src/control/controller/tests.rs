@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::config::LEG_JOINT_NAMES;
+use crate::control::transitions::BRAKE_BLEND_FROM;
 use crate::control::CommandMode;
 use crate::estimator::GRAVITY_MPS2;
 use crate::Setup;

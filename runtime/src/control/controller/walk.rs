@@ -4,7 +4,9 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
-use crate::control::transitions::*;
+use crate::control::transitions::{
+    blend_weight, BRAKE_BLEND_FROM, START_BLEND_SPAN, START_KNEE_BLEND_SPAN,
+};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
 use model::robot::MAX_DOF;
 
