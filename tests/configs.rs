@@ -46,7 +46,7 @@ fn every_config_file_loads_and_validates() {
                             .unwrap_or_else(|e| panic!("{e}"));
                     }
                     Some("faults") => {
-                        runtime::faults::FaultProfile::load(path)
+                        runtime::sim::faults::FaultProfile::load(path)
                             .unwrap_or_else(|e| panic!("{e}"));
                     }
                     _ => panic!(

@@ -6,10 +6,10 @@
 //!
 //! Runs are short (3–6 s of simulated time, ≈ 0.1–0.2 s of wall time each).
 
-use runtime::controller::ControlState;
-use runtime::faults::{Fault, FaultEvent, FaultProfile};
+use runtime::control::ControlState;
 use runtime::safety::Trip;
-use runtime::sim_run::{walk, SimWalkOptions, SimWalkReport};
+use runtime::sim::faults::{Fault, FaultEvent, FaultProfile};
+use runtime::sim::run::{walk, SimWalkOptions, SimWalkReport};
 use runtime::Setup;
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -65,7 +65,7 @@ fn run_seeded(name: &str, duration_s: f64, profile: FaultProfile, seed: u64) -> 
 /// The log is complete (footer written, nothing dropped), readable, and holds exactly the trip
 /// of the run on `/safety` with its reason and values.
 fn check_log(name: &str, report: &SimWalkReport) {
-    let info = runtime::log_read::read_info(log_path(name)).expect("the log reads back");
+    let info = runtime::telemetry::log_read::read_info(log_path(name)).expect("the log reads back");
     assert_eq!(info.truncated, None, "{name}: log cut off");
     assert_eq!(info.dropped(), Some(0), "{name}: log drops");
     let ticks = report.summary.ticks;
@@ -81,7 +81,7 @@ fn check_log(name: &str, report: &SimWalkReport) {
             let v = &info.safety_events[0];
             assert!(v.contains("\"t_s\":"), "{name}: {v}");
             // Every field of the trip (reason, code and its values) as the run latched it.
-            let expected = runtime::log::trip_json(&trip);
+            let expected = runtime::telemetry::log::trip_json(&trip);
             for (key, value) in expected.as_object().expect("a JSON object") {
                 let pair = format!("\"{key}\":{value}");
                 assert!(v.contains(&pair), "{name}: no {pair} in {v}");

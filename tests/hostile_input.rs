@@ -2,7 +2,7 @@
 //! planner TOML, URDF) answers arbitrary and mutated input with `Ok` or an error that names the
 //! source, never a panic. Inputs: random bytes, and the shipped files with bytes deleted,
 //! duplicated or replaced, and numbers replaced by extreme values. And the MCAP log readers
-//! (`runtime::log_read`: `read_info`, `recover`, `joint_series`) fed a real log of a short
+//! (`runtime::telemetry::log_read`: `read_info`, `recover`, `joint_series`) fed a real log of a short
 //! simulated walk, cut off, with bytes overwritten, deleted or duplicated: never a panic, and
 //! every error names the file.
 
@@ -138,9 +138,9 @@ fn real_log() -> &'static [u8] {
     LOG.get_or_init(|| {
         let setup = runtime::Setup::shipped().expect("shipped setup");
         let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hostile-real.mcap");
-        let mut options = runtime::sim_run::SimWalkOptions::new(0.3);
+        let mut options = runtime::sim::run::SimWalkOptions::new(0.3);
         options.log_path = Some(path.clone());
-        runtime::sim_run::walk(&setup, &options).expect("short walk");
+        runtime::sim::run::walk(&setup, &options).expect("short walk");
         std::fs::read(&path).expect("log written")
     })
 }
@@ -198,16 +198,16 @@ proptest! {
         let out = dir.join("hostile-recovered.mcap");
         std::fs::write(&path, apply_log(real_log(), &edits)).expect("write");
         let name = "hostile-damaged.mcap";
-        if let Err(e) = runtime::log_read::read_info(&path) {
+        if let Err(e) = runtime::telemetry::log_read::read_info(&path) {
             prop_assert!(e.to_string().contains(name), "read_info: {e}");
         }
-        if let Err(e) = runtime::log_read::joint_series(&path) {
+        if let Err(e) = runtime::telemetry::log_read::joint_series(&path) {
             prop_assert!(e.to_string().contains(name), "joint_series: {e}");
         }
-        match runtime::log_read::recover(&path, &out) {
+        match runtime::telemetry::log_read::recover(&path, &out) {
             Ok(_) => {
                 // What recover writes reads back whole.
-                let info = runtime::log_read::read_info(&out);
+                let info = runtime::telemetry::log_read::read_info(&out);
                 prop_assert!(info.as_ref().is_ok_and(|i| i.truncated.is_none()), "{info:?}");
             }
             Err(e) => {
@@ -223,9 +223,9 @@ fn the_undamaged_log_reads_whole() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
     let path = dir.join("hostile-intact.mcap");
     std::fs::write(&path, real_log()).expect("write");
-    let info = runtime::log_read::read_info(&path).expect("reads");
+    let info = runtime::telemetry::log_read::read_info(&path).expect("reads");
     assert_eq!(info.truncated, None);
     assert_eq!(info.count("/joints"), 300);
-    let series = runtime::log_read::joint_series(&path).expect("series");
+    let series = runtime::telemetry::log_read::joint_series(&path).expect("series");
     assert_eq!(series.t_s.len(), 300);
 }

@@ -7,8 +7,8 @@
 //! The walk fixture also checks the gait tiles (`adam plot tiles`) against the robot's
 //! geometry.
 
-use runtime::controller::ControlState;
-use runtime::replay::{replay, FIXTURES};
+use runtime::control::ControlState;
+use runtime::telemetry::replay::{replay, FIXTURES};
 use std::path::PathBuf;
 
 fn fixture(name: &str) -> PathBuf {
@@ -39,7 +39,7 @@ fn every_fixture_replays_bit_identically() {
         // One state and six command fields per leg motor, every tick.
         assert_eq!(report.values_compared, ticks * 25, "{name}");
         // The fixture is a complete log that `adam logs info` reads, with its trips.
-        let info = runtime::log_read::read_info(fixture(name)).expect("log info");
+        let info = runtime::telemetry::log_read::read_info(fixture(name)).expect("log info");
         assert_eq!(info.truncated, None, "{name}");
         assert_eq!(info.count("/input"), ticks, "{name}");
         assert_eq!(info.count("/command"), ticks, "{name}");

@@ -1,7 +1,7 @@
 //! End to end: the runtime walks the shipped (co-designed) gait on the simulated ADAM (SimBus + RobotSim, the
 //! full A1 CAN codec path, simulated clock) on the treadmill, and the walk matches the plan.
 
-use runtime::sim_run::{walk, SimWalkOptions, SimWalkReport};
+use runtime::sim::run::{walk, SimWalkOptions, SimWalkReport};
 use runtime::Setup;
 
 fn walk_for(duration_s: f64, belt_speed_mps: Option<f64>) -> (Setup, SimWalkReport) {
@@ -24,7 +24,7 @@ fn assert_kept_walking(report: &SimWalkReport, duration_s: f64) {
     assert_eq!(report.summary.trip, None, "safety trip: {report}");
     assert_eq!(
         report.summary.final_state,
-        runtime::controller::ControlState::Walk,
+        runtime::control::ControlState::Walk,
         "{report}"
     );
     assert!(report.walked_s >= duration_s - 1e-3, "{report}");

@@ -1,5 +1,6 @@
-//! The torso IMU in the sagittal plane: the [`Imu`] trait the runtime reads, and a seeded noise
-//! model ([`NoisyImu`]) the simulator puts on its ground truth.
+//! The torso IMU in the sagittal plane: the [`Imu`] trait the runtime reads (the simulator's and
+//! any real IMU's one trait), and a seeded noise model ([`NoisyImu`]) the simulator puts on its
+//! ground truth.
 //!
 //! A sample is the pitch rate (gyro about +y) and the specific force `a − g` in the torso frame
 //! (x forward, z up along the torso when upright), at the IMU's mounting point. Reading writes
@@ -15,6 +16,7 @@
 //! last good sample, repeated with fresh time stamps).
 
 use crate::noise::gaussian;
+use crate::sim::{bus::SimBus, plant::JointPlant};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thiserror::Error;
@@ -43,10 +45,36 @@ pub enum ImuError {
     Timeout,
 }
 
-/// A source of IMU samples: the simulated IMU or, later, a real one.
+/// A source of IMU samples: the simulated IMU or, later, a real one. The runtime's loop reads
+/// it once per tick with [`Imu::read_at`]; it must not block for long nor allocate.
 pub trait Imu {
     /// Write the latest sample into `out`; allocates nothing.
     fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError>;
+
+    /// The latest sample for a reader whose clock reads `t_s` \[s\] (the runtime's loop time),
+    /// stamped `t_s`; `None` if there is none (the loop does not tell a dropout from a missing
+    /// IMU). By default [`Imu::read`], restamped; a source without a clock of its own (a test
+    /// IMU at rest) computes its sample at `t_s`.
+    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
+        let mut sample = ImuSample::default();
+        self.read(&mut sample).ok()?;
+        Some(ImuSample {
+            t_s,
+            gyro_pitch_rad_s: sample.gyro_pitch_rad_s,
+            accel_x_mps2: sample.accel_x_mps2,
+            accel_z_mps2: sample.accel_z_mps2,
+        })
+    }
+}
+
+/// A simulated bus whose plant also simulates the torso IMU (the robot simulator) is that IMU.
+impl<P: JointPlant + Imu> Imu for SimBus<P> {
+    fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
+        self.plant_mut().read(out)
+    }
+    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
+        self.plant_mut().read_at(t_s)
+    }
 }
 
 /// A fault of the IMU's output.

@@ -16,8 +16,7 @@
 //! | [`sim::wire`] | seeded wire faults (loss, corruption, delay), their counts, a frame recorder |
 //! | [`sim::plant`] | the `JointPlant` trait and independent rigid joints |
 //! | [`sim::robot`] | the rigid-body plant: the planar ADAM on a treadmill (optional boom): point-foot contact, impacts, falls, ground truth; a `JointPlant`; pushes, belt steps, IMU faults |
-//! | [`sim_bus`] | the old paths of `SimBus` and its parts, now in [`sim`] (issue #26; removed at the merge) |
-//! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force), a seeded noise model and [`imu::ImuFault`] (dropout, spike, frozen) |
+//! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force) the simulator and the runtime share, a seeded noise model and [`imu::ImuFault`] (dropout, spike, frozen) |
 //! | [`conformance`] | the checks every `MotorBus` must pass |
 //!
 //! ## Data flow of one control cycle
@@ -73,6 +72,5 @@ pub mod conformance;
 pub mod imu;
 mod noise;
 pub mod sim;
-pub mod sim_bus;
 pub mod socketcan_bus;
 pub mod timing;

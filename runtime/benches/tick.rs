@@ -4,7 +4,7 @@
 //! reported, never asserted.
 
 use runtime::config::PhaseSource;
-use runtime::controller::{CommandMode, OperatorCommand, TickInput, TickOutput};
+use runtime::control::{CommandMode, OperatorCommand, TickInput, TickOutput};
 use runtime::estimator::GRAVITY_MPS2;
 use runtime::{ImuSample, Setup};
 use std::time::Instant;
@@ -33,7 +33,7 @@ fn measure(phase: PhaseSource) -> (f64, f64, f64, f64) {
         input.t_s = f64::from(k) * 1e-3;
         input.imu = Some(ImuSample {
             t_s: input.t_s,
-            gyro_pitch_rad_s: runtime::io::test_dither_rad_s(input.t_s),
+            gyro_pitch_rad_s: runtime::backend::test_dither_rad_s(input.t_s),
             accel_x_mps2: -GRAVITY_MPS2 * 0.0237_f64.sin(),
             accel_z_mps2: GRAVITY_MPS2 * 0.0237_f64.cos(),
         });

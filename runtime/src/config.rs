@@ -5,7 +5,7 @@
 //! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
 //! [`drivers::timing::validate`] refuses, naming the file, the field and the value.
 
-use crate::controller::{LEG_SLOTS, MAX_HELD};
+use crate::slots::{SlotLayout, LEG_SLOTS, MAX_HELD, SLOTS};
 use crate::{Result, RuntimeError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -401,7 +401,7 @@ impl RuntimeConfig {
         }
         let l = &self.loop_;
         positive("loop.rate_hz", l.rate_hz)?;
-        if l.bus_count == 0 || l.bus_count > drivers::sim_bus::MAX_BUSES {
+        if l.bus_count == 0 || l.bus_count > drivers::sim::bus::MAX_BUSES {
             return Err(bad(
                 "loop.bus_count",
                 l.bus_count.to_string(),
@@ -637,6 +637,36 @@ impl RuntimeConfig {
             ));
         }
         Ok(())
+    }
+}
+
+// Here, beside the config it reads, so that `crate::slots` stays a leaf.
+impl SlotLayout {
+    /// The layout of a config; `with_held` = whether the held motors are driven.
+    pub fn new(config: &RuntimeConfig, with_held: bool) -> Self {
+        let mut l = Self {
+            present: [false; SLOTS],
+            direction: [1.0; LEG_SLOTS],
+            offset_rad: [0.0; LEG_SLOTS],
+            held_center_rad: [0.0; SLOTS],
+            held_tolerance_rad: [0.0; SLOTS],
+            held_kp: [0.0; SLOTS],
+            held_kd: [0.0; SLOTS],
+        };
+        for (k, m) in config.leg_motors.iter().enumerate() {
+            l.present[k] = true;
+            l.direction[k] = m.direction;
+            l.offset_rad[k] = m.offset_rad;
+        }
+        for (i, h) in config.held.iter().enumerate().take(MAX_HELD) {
+            let s = LEG_SLOTS + i;
+            l.present[s] = with_held;
+            l.held_center_rad[s] = h.position_rad;
+            l.held_tolerance_rad[s] = h.tolerance_rad;
+            l.held_kp[s] = h.kp_nm_per_rad;
+            l.held_kd[s] = h.kd_nm_s_per_rad;
+        }
+        l
     }
 }
 

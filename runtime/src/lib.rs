@@ -7,26 +7,23 @@
 //!
 //! | module | what |
 //! |---|---|
+//! | [`slots`] | the motor slots everyone shares: [`slots::MotorSample`], [`slots::SlotLayout`], slot counts (a leaf) |
 //! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints |
-//! | [`controller`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine |
+//! | [`control`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine ([`control::Controller`]); double support |
 //! | [`estimator`] | torso pitch Kalman filter with gyro-bias estimation |
 //! | [`safety`] | per-tick checks; a [`safety::Trip`] (small `Copy` enum) sends the controller to Damping |
 //! | [`operator`] | operator commands into the loop: SPSC ring + latching e-stop flag, never blocks |
-//! | [`io`] | the [`Imu`] trait and [`io::WithImu`] (pair a bus with an IMU) |
+//! | [`backend`] | what the loop runs on: [`backend::Backend`] = [`drivers::bus::MotorBus`] + [`drivers::imu::Imu`]; [`backend::WithImu`] (pair a bus with an IMU) |
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
-//! | [`telemetry`] | `#[repr(C)]` [`telemetry::StateSample`], published over iceoryx2 (feature `iceoryx2`, default) |
-//! | [`log`] | MCAP writer thread fed by a wait-free queue; drops counted |
-//! | [`log_read`] | reading logs back: `adam logs info\|recover`, joint series |
-//! | [`replay`] | deterministic replay of a log through the controller (`adam replay`), fixtures |
+//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info\|recover`, joint series); deterministic [`telemetry::replay`] (`adam replay`, fixtures) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
-//! | [`sim_run`] | the loop on the simulated ADAM (`SimBus<RobotSim>`, treadmill), walk metrics from ground truth; fault injection and the soak |
-//! | [`faults`] | fault profiles (TOML or built-in): wire faults, scheduled and random faults, seeded schedule |
+//! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]) |
 //!
 //! ## Data flow of one tick
 //! ```text
 //!  MotorBus::exchange(last commands) ─▶ replies ─┐
-//!  Imu::read_imu(t) ─────────────────────────────┤         operator ring / e-stop flag / script
+//!  Imu::read_at(t) ──────────────────────────────┤         operator ring / e-stop flag / script
 //!                                                ▼                      │
 //!  Controller::tick(TickInput{t, motors[14], imu, operator, overruns}) ◀┘
 //!    ├─ PitchEstimator (θ̂, b̂)      ├─ SafetyMonitor ─ trip ─▶ Damping (latched)
@@ -41,11 +38,11 @@
 //!
 //! ## Example
 //! ```no_run
-//! use runtime::controller::OperatorCommand;
-//! use runtime::io::{StaticImu, WithImu};
+//! use runtime::backend::{StaticImu, WithImu};
+//! use runtime::control::OperatorCommand;
 //! use runtime::rt_loop::{LoopOptions, SimulatedClock};
 //! use runtime::Setup;
-//! # fn backend() -> WithImu<drivers::sim_bus::SimBus<drivers::sim_bus::InertiaDampingPlant>, StaticImu> { unimplemented!() }
+//! # fn backend() -> WithImu<drivers::sim::bus::SimBus<drivers::sim::plant::InertiaDampingPlant>, StaticImu> { unimplemented!() }
 //!
 //! # fn main() -> runtime::Result<()> {
 //! let setup = Setup::load("configs/runtime/adam.toml", "configs/gaits/adam_codesign.json")?;
@@ -61,29 +58,29 @@
 //! # }
 //! ```
 
+pub mod backend;
 pub mod config;
-pub mod controller;
-mod double_support;
+pub mod control;
 mod error;
 pub mod estimator;
-pub mod faults;
-pub mod io;
-pub mod log;
-mod log_guard;
-pub mod log_read;
 pub mod operator;
-pub mod replay;
 pub mod robot;
 pub mod rt_loop;
 mod rt_sys;
 pub mod safety;
-pub mod sim_run;
+pub mod sim;
+pub mod slots;
 pub mod telemetry;
 pub mod tiles;
 
+pub use backend::Backend;
+pub use drivers::imu::{Imu, ImuSample};
 pub use error::{Result, RuntimeError};
-pub use io::{Imu, ImuSample};
 pub use rt_loop::{run, LoopOptions, RunSummary};
+
+// Compatibility paths for the CLI until it moves to the new rooms (issue #26).
+pub use sim::{faults, run as sim_run};
+pub use telemetry::{log_read, replay};
 
 /// The runtime's default gait (repository-relative): the co-designed ADAM's (`adam codesign`).
 pub const DEFAULT_GAIT: &str = "configs/gaits/adam_codesign.json";
@@ -160,7 +157,7 @@ impl Setup {
     }
 
     /// A controller for this setup.
-    pub fn controller(&self, with_held: bool) -> Result<controller::Controller> {
-        controller::Controller::new(&self.config, &self.gait, self.model.clone(), with_held)
+    pub fn controller(&self, with_held: bool) -> Result<control::Controller> {
+        control::Controller::new(&self.config, &self.gait, self.model.clone(), with_held)
     }
 }

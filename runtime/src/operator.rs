@@ -9,7 +9,7 @@
 //! ([`spawn_iceoryx2_forwarder`]: [`OperatorMessage`]s on `<telemetry.service_name>/operator`,
 //! sent by `adam op <command>` or any other process with [`send_over_iceoryx2`]).
 
-use crate::controller::OperatorCommand;
+use crate::control::OperatorCommand;
 #[cfg(feature = "iceoryx2")]
 use iceoryx2::prelude::ZeroCopySend;
 use std::sync::atomic::{AtomicBool, Ordering};

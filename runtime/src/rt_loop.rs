@@ -1,10 +1,10 @@
 //! The loop driver: runs the [`Controller`] at a fixed rate on its own thread, against any
-//! backend that is a [`MotorBus`] and an [`Imu`] (SimBus, SocketCAN + IMU, replay).
+//! [`Backend`]: a `MotorBus` and an `Imu` (SimBus, SocketCAN + IMU, replay).
 //!
 //! One period:
 //! ```text
 //! exchange(commands of the last tick) → replies ─┐     (one tick of command latency)
-//! read_imu(t) ───────────────────────────────────┤
+//! read_at(t) (the IMU) ──────────────────────────┤
 //! operator: script entry due, else ring poll ────┴─▶ Controller::tick ─▶ commands
 //!                                                      └─▶ StateSample ─▶ iceoryx2 + log queue
 //! sleep until the absolute deadline t0 + (k+1)·T; late → overrun (streak feeds the safety monitor)
@@ -15,20 +15,20 @@
 //! asks for `mlockall` and SCHED_FIFO when the config says so; refusals are warnings, reported
 //! in [`RunSummary::realtime`].
 
-use crate::controller::{
-    CommandMode, ControlState, Controller, JointCommand, MotorSample, OperatorCommand, TickInput,
-    TickOutput, LEG_SLOTS, OUTPUTS, SLOTS,
+use crate::backend::Backend;
+use crate::control::{
+    CommandMode, ControlState, Controller, JointCommand, OperatorCommand, TickInput, TickOutput,
 };
-use crate::io::Imu;
-use crate::log::{LogContext, LogRecord, LogStats, TickRecord};
 use crate::operator::OperatorReceiver;
 use crate::rt_sys;
 use crate::safety::Trip;
-use crate::telemetry::{LoopStats, StateSample};
+use crate::slots::{MotorSample, LEG_SLOTS, OUTPUTS, SLOTS};
+use crate::telemetry::log::{LogContext, LogRecord, LogStats, TickRecord};
+use crate::telemetry::sample::{LoopStats, StateSample};
 use crate::{Result, RuntimeError, Setup};
 use core::time::Duration;
 use drivers::a1::{Command, MotorId, Reply};
-use drivers::bus::{BusError, MotorBus};
+use drivers::bus::BusError;
 use std::path::PathBuf;
 
 /// Where the loop's time comes from.
@@ -153,7 +153,7 @@ pub struct TrackingStats {
 }
 
 impl TrackingStats {
-    fn add(&mut self, status: &crate::controller::Status) {
+    fn add(&mut self, status: &crate::control::Status) {
         self.walk_ticks += 1;
         for i in 0..OUTPUTS {
             let e = status.y_des_rad[i] - status.y_act_rad[i];
@@ -303,7 +303,7 @@ pub fn run<B, C>(
     operator: Option<OperatorReceiver>,
 ) -> Result<(RunSummary, B)>
 where
-    B: MotorBus + Imu + Send + 'static,
+    B: Backend + Send + 'static,
     C: Clock + Send + 'static,
 {
     let controller = setup.controller(options.with_held)?;
@@ -335,7 +335,7 @@ where
 
 /// The loop itself, on the calling thread (what [`run`] spawns).
 #[allow(clippy::too_many_arguments)]
-pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
+pub fn run_on_this_thread<B: Backend, C: Clock>(
     mut controller: Controller,
     config: &crate::config::RuntimeConfig,
     mut log_context: LogContext,
@@ -394,7 +394,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
     }
     #[cfg(feature = "iceoryx2")]
     let mut publisher = if options.publish && !config.telemetry.service_name.is_empty() {
-        Some(crate::telemetry::Publisher::new(
+        Some(crate::telemetry::sample::Publisher::new(
             &config.telemetry.service_name,
         )?)
     } else {
@@ -405,8 +405,11 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
         .insert("start_walking".into(), options.start_walking.to_string());
     let (mut log_tx, logger) = match &options.log_path {
         Some(path) => {
-            let (mut tx, logger) =
-                crate::log::start(path, log_context, config.telemetry.log_queue_capacity)?;
+            let (mut tx, logger) = crate::telemetry::log::start(
+                path,
+                log_context,
+                config.telemetry.log_queue_capacity,
+            )?;
             tx.wait_when_full(clock.is_simulated());
             (Some(tx), Some(logger))
         }
@@ -483,7 +486,7 @@ pub fn run_on_this_thread<B: MotorBus + Imu, C: Clock>(
             }
         }
         input.t_s = t;
-        input.imu = backend.read_imu(t);
+        input.imu = backend.read_at(t);
         input.operator = match script.peek() {
             Some(&&(at, cmd)) if at <= t => {
                 script.next();

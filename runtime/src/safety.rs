@@ -5,8 +5,8 @@
 //! the first trip and latches it until an operator `Reset`.
 
 use crate::config::SafetyConfig;
-use crate::controller::{MotorSample, SlotLayout, LEG_SLOTS, SLOTS};
-use crate::ImuSample;
+use crate::slots::{MotorSample, SlotLayout, LEG_SLOTS, SLOTS};
+use drivers::imu::ImuSample;
 
 /// Why the controller went to Damping.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -341,7 +341,7 @@ impl SafetyMonitor {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::controller::SlotLayout;
+    use crate::slots::SlotLayout;
 
     /// Feeds `n` ticks at 1 kHz with healthy motors and the IMU sample `imu(k)`; the first trip.
     fn run(n: u32, imu: impl Fn(u32) -> ImuSample) -> Option<(u32, Trip)> {
@@ -386,11 +386,11 @@ mod tests {
         assert_eq!(
             run(2000, |k| sample(
                 k,
-                crate::io::test_dither_rad_s(f64::from(k) * 1e-3)
+                crate::backend::test_dither_rad_s(f64::from(k) * 1e-3)
             )),
             None
         );
-        let live = |k: u32| crate::io::test_dither_rad_s(f64::from(k) * 1e-3);
+        let live = |k: u32| crate::backend::test_dither_rad_s(f64::from(k) * 1e-3);
         // Frozen from tick 100 on (value and time stamp): the last fresh sample is at 100 ms;
         // stale once older than the 20 ms limit, at 121 ms.
         let (k, trip) = run(2000, |k| {

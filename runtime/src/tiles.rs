@@ -13,9 +13,10 @@
 //! put during a step. The step drawn is the middle one of the complete steps in the log (a
 //! step whose start and end are both in the log).
 
-use crate::controller::{ControlState, SlotLayout};
-use crate::log::CHANNELS;
-use crate::log_read::{check_schema_version, log_err, read_bytes, top_level};
+use crate::control::ControlState;
+use crate::slots::SlotLayout;
+use crate::telemetry::log::CHANNELS;
+use crate::telemetry::log_read::{check_schema_version, log_err, read_bytes, top_level};
 use crate::Result;
 use model::Side;
 use serde_json::Value;

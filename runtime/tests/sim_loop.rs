@@ -4,9 +4,12 @@
 
 use drivers::a1::MotorId;
 use drivers::bus::{Lifecycle, MotorBus};
-use drivers::sim_bus::{InertiaDampingPlant, JointPlant, SimBus};
-use runtime::controller::{ControlState, OperatorCommand};
-use runtime::io::{StaticImu, WithImu};
+use drivers::sim::{
+    bus::SimBus,
+    plant::{InertiaDampingPlant, JointPlant},
+};
+use runtime::backend::{StaticImu, WithImu};
+use runtime::control::{ControlState, OperatorCommand};
 use runtime::rt_loop::{self, LoopOptions, SimulatedClock};
 use runtime::Setup;
 
@@ -15,7 +18,7 @@ fn backend(setup: &Setup, start_rad: [f64; 4]) -> WithImu<SimBus<InertiaDampingP
         pitch_rad: 0.0,
         gyro_bias_rad_s: 0.002,
     };
-    runtime::sim_run::joint_bench_backend(setup, &start_rad, imu).expect("joint bench")
+    runtime::sim::run::joint_bench_backend(setup, &start_rad, imu).expect("joint bench")
 }
 
 #[test]

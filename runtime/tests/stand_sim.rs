@@ -4,11 +4,11 @@
 //! (a launch in double support carries the torso over the stance foot, then the rear foot
 //! lifts and the gait takes over) → Stop (the braking step) → Stand at rest.
 
-use drivers::sim::SimEvent;
+use drivers::sim::robot::SimEvent;
 use model::Side;
-use runtime::controller::{ControlState, OperatorCommand};
+use runtime::control::{ControlState, OperatorCommand};
 use runtime::rt_loop::{LoopOptions, SimulatedClock};
-use runtime::sim_run::{sim_backend, SimWalkOptions};
+use runtime::sim::run::{sim_backend, SimWalkOptions};
 use runtime::Setup;
 
 #[test]

@@ -6,11 +6,11 @@
 //! the front foot far enough ahead, and Stand holds the landing pose: the robot rocks from foot
 //! to foot a few times and comes to rest on both feet.
 
-use drivers::sim::SimEvent;
+use drivers::sim::robot::SimEvent;
 use model::Side;
-use runtime::controller::{ControlState, OperatorCommand};
+use runtime::control::{ControlState, OperatorCommand};
 use runtime::rt_loop::{LoopOptions, SimulatedClock};
-use runtime::sim_run::{sim_backend, SimWalkOptions};
+use runtime::sim::run::{sim_backend, SimWalkOptions};
 use runtime::Setup;
 
 /// Walks from the planned state, says Stop at `stop_at_s`, runs to `end_s`; checks the robot

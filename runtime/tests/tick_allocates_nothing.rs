@@ -1,7 +1,7 @@
 //! `Controller::tick` allocates nothing: a counting global allocator watches this test
 //! thread over thousands of ticks through Ramp, Stand, Walk (its launch in double support,
 //! both phase sources, stance switches included), Stop (the braking step) and Stand again. No locks: by construction `Controller` owns only plain data (no `Mutex`,
-//! `RwLock`, channel or `Arc` in `controller.rs`, `estimator.rs`, `safety.rs`);
+//! `RwLock`, channel or `Arc` in `control/`, `estimator.rs`, `safety.rs`);
 //! `controller_is_owned_plain_data` checks it is `'static + Clone + Send + Sync` (no borrowed
 //! shared state).
 
@@ -9,7 +9,7 @@
 #![allow(unsafe_code)]
 
 use runtime::config::PhaseSource;
-use runtime::controller::{CommandMode, ControlState, OperatorCommand, TickInput, TickOutput};
+use runtime::control::{CommandMode, ControlState, OperatorCommand, TickInput, TickOutput};
 use runtime::estimator::GRAVITY_MPS2;
 use runtime::{ImuSample, Setup};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -82,7 +82,7 @@ fn walk_without_allocating(phase: PhaseSource) {
             input.t_s = f64::from(k) * 1e-3;
             input.imu = Some(ImuSample {
                 t_s: input.t_s,
-                gyro_pitch_rad_s: 0.001 + runtime::io::test_dither_rad_s(input.t_s),
+                gyro_pitch_rad_s: 0.001 + runtime::backend::test_dither_rad_s(input.t_s),
                 accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
                 accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
             });
@@ -134,5 +134,5 @@ fn the_counter_sees_allocations() {
 #[test]
 fn controller_is_owned_plain_data() {
     fn owned<T: Send + Sync + Clone + 'static>() {}
-    owned::<runtime::controller::Controller>();
+    owned::<runtime::control::Controller>();
 }

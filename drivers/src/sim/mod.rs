@@ -16,9 +16,3 @@ pub mod firmware;
 pub mod plant;
 pub mod robot;
 pub mod wire;
-
-// Compatibility paths for the runtime and the CLI until they move to the new rooms (issue #26).
-pub use robot::{
-    standing_pose, Boom, Contact, FallCause, LegJoint, Result, RobotSim, RobotSimConfig,
-    RobotSimError, SimEvent, Touchdown, PENETRATION_TOLERANCE_M,
-};

@@ -9,7 +9,7 @@
 //! `/joints` (per joint q, dq, τ, temperature, commanded q, dq, τ), `/hzd` (phase, τ̇, stance,
 //! steps, desired/actual outputs), `/estimator` (pitch, rate, gyro bias, raw IMU), `/state`
 //! (state, trip, overruns, tick compute time), `/safety` (one message per trip, with its
-//! values), `/transitions` (state changes), and for replay (`adam replay`, [`crate::replay`])
+//! values), `/transitions` (state changes), and for replay (`adam replay`, [`crate::telemetry::replay`])
 //! `/input` (everything the controller read in a tick: time, motor replies, IMU sample,
 //! operator command, overrun streak) and `/command` (every command it wrote, and its state),
 //! both every tick whatever `log_every_n_ticks` says. Floats in `/input` and `/command` are
@@ -20,11 +20,10 @@
 //! which replay needs) and `log_stats` counts written and dropped records.
 
 use crate::config::RuntimeConfig;
-use crate::controller::{
-    CommandMode, ControlState, JointCommand, SlotLayout, TickInput, OUTPUTS, SLOTS,
-};
+use crate::control::{CommandMode, ControlState, JointCommand, TickInput};
 use crate::safety::Trip;
-use crate::telemetry::StateSample;
+use crate::slots::{SlotLayout, OUTPUTS, SLOTS};
+use crate::telemetry::sample::StateSample;
 use crate::{Result, RuntimeError};
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
@@ -188,12 +187,12 @@ pub fn joint_names(config: &RuntimeConfig, layout: &SlotLayout) -> [Option<Strin
         if !layout.present[slot] {
             continue;
         }
-        *name = if slot < crate::controller::LEG_SLOTS {
+        *name = if slot < crate::slots::LEG_SLOTS {
             Some(config.leg_motors[slot].joint.clone())
         } else {
             config
                 .held
-                .get(slot - crate::controller::LEG_SLOTS)
+                .get(slot - crate::slots::LEG_SLOTS)
                 .map(|h| h.motor.joint.clone())
         };
     }

@@ -24,14 +24,14 @@
 //! assert!(report.divergence.is_none(), "{report}");
 //! ```
 
-use crate::controller::{
-    CommandMode, ControlState, Controller, JointCommand, MotorSample, OperatorCommand, TickInput,
-    TickOutput, SLOTS,
+use crate::control::{
+    CommandMode, ControlState, Controller, JointCommand, OperatorCommand, TickInput, TickOutput,
 };
-use crate::io::ImuSample;
-use crate::log::{exact_from_json, joint_names, CHANNELS};
-use crate::log_read::{check_schema_version, log_err, read_bytes, top_level, TopLevel};
+use crate::slots::{MotorSample, SLOTS};
+use crate::telemetry::log::{exact_from_json, joint_names, CHANNELS};
+use crate::telemetry::log_read::{check_schema_version, log_err, read_bytes, top_level, TopLevel};
 use crate::{Result, Setup};
+use drivers::imu::ImuSample;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
@@ -442,7 +442,7 @@ pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
     setup.config.telemetry.log_every_n_ticks = 20;
     let setup = &setup;
     use crate::rt_loop::{LoopOptions, SimulatedClock};
-    use crate::sim_run::{sim_backend, walk, SimWalkOptions};
+    use crate::sim::run::{sim_backend, walk, SimWalkOptions};
     std::fs::create_dir_all(dir).map_err(|error| crate::RuntimeError::Io {
         path: dir.to_path_buf(),
         error,
@@ -470,13 +470,13 @@ pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
     let start: Vec<f64> = (0..setup.config.leg_motors.len())
         .map(|j| first[j] + 0.1 * (-1f64).powi(j as i32))
         .collect();
-    let imu = crate::io::StaticImu {
+    let imu = crate::backend::StaticImu {
         pitch_rad: 0.02,
         gyro_bias_rad_s: 0.002,
     };
     crate::run(
         &quick_ramp,
-        crate::sim_run::joint_bench_backend(setup, &start, imu)?,
+        crate::sim::run::joint_bench_backend(setup, &start, imu)?,
         SimulatedClock::default(),
         options,
         None,
@@ -501,7 +501,7 @@ pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::sim_run::{walk, SimWalkOptions};
+    use crate::sim::run::{walk, SimWalkOptions};
     use std::collections::BTreeMap;
 
     fn temp_path(tag: &str) -> PathBuf {
@@ -581,14 +581,14 @@ mod tests {
             x = (x * 1.618_033_988_749_895 + 0.3).fract() * 10f64.powi(k % 40 - 20);
             let v = if k % 2 == 0 { x } else { -x };
             for y in [v, f64::from_bits(v.to_bits() + 1), 5e-324, -0.0] {
-                let text = serde_json::to_string(&crate::log::exact_json(y)).unwrap();
+                let text = serde_json::to_string(&crate::telemetry::log::exact_json(y)).unwrap();
                 let back: Value = serde_json::from_str(&text).unwrap();
                 let z = exact_from_json(&back).unwrap();
                 assert_eq!(z.to_bits(), y.to_bits(), "{y:e} → {text}");
             }
         }
         for y in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            let z = exact_from_json(&crate::log::exact_json(y)).unwrap();
+            let z = exact_from_json(&crate::telemetry::log::exact_json(y)).unwrap();
             assert!(z.is_nan() == y.is_nan() && (y.is_nan() || z == y));
         }
     }

@@ -3,13 +3,13 @@
 //! A [`FaultProfile`] is checked data (TOML, `deny_unknown_fields`, [`FaultProfile::validate`]
 //! names the field and value it refuses) with three parts:
 //! * `wire`: CAN faults for the whole run (loss, corruption, delay), applied by
-//!   [`drivers::sim_bus::SimBus`];
+//!   [`drivers::sim::bus::SimBus`];
 //! * `events`: faults at given times for given durations ([`Fault`]: a silent, hot or faulted
 //!   motor, IMU dropout, spike or freeze, loop overruns, a belt-speed step, a push);
 //! * `random`: faults drawn from a list at exponentially distributed intervals (the soak).
 //!
 //! [`FaultProfile::schedule`] turns the events and the random part into one time-sorted list
-//! for a run — pure and seeded: the same seed gives the same schedule. [`crate::sim_run`]
+//! for a run — pure and seeded: the same seed gives the same schedule. [`crate::sim::run`]
 //! applies it while the loop runs. Built-in profiles have names ([`BUILT_IN`]); anything else is
 //! read as a TOML file:
 //!
@@ -27,7 +27,7 @@
 //! ```
 
 use crate::{Result, RuntimeError};
-use drivers::sim_bus::WireFaults;
+use drivers::sim::wire::WireFaults;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};

@@ -1,36 +1,19 @@
-//! The sensors besides the motors: the IMU trait and its samples, plus the pairing of a
-//! [`MotorBus`] with an [`Imu`] into one loop backend.
+//! What the loop runs on: a [`Backend`] is a [`MotorBus`] and an [`Imu`] (the drivers' one IMU
+//! trait), with the ground truth where a simulator knows it.
 //!
-//! The loop driver takes one backend that is both a [`MotorBus`] and an [`Imu`]:
 //! * real hardware: [`WithImu`] pairs a `SocketCanBus` with an IMU driver;
-//! * simulation: the robot simulator owns both the joints and the torso, so a
-//!   `SimBus<P>` whose plant `P` implements [`Imu`] is itself a backend (blanket impl below);
+//! * simulation: the robot simulator owns both the joints and the torso, so a `SimBus<RobotSim>`
+//!   is itself a backend ([`crate::sim::run`]);
 //! * tests: [`WithImu`] of a `SimBus<InertiaDampingPlant>` and a [`StaticImu`].
 
 use core::time::Duration;
 use drivers::a1::{Command, Reply};
 use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
-use drivers::sim_bus::{JointPlant, SimBus};
+use drivers::imu::{Imu, ImuError, ImuSample};
 
-/// One IMU sample in the torso frame (pitch about +y as in [`model::kinematics`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ImuSample {
-    /// Time the sample was taken, s (same clock as the controller's `t_s`).
-    pub t_s: f64,
-    /// Gyro pitch rate, rad/s.
-    pub gyro_pitch_rad_s: f64,
-    /// Specific force along torso x, m/s².
-    pub accel_x_mps2: f64,
-    /// Specific force along torso z, m/s².
-    pub accel_z_mps2: f64,
-}
-
-/// A source of IMU samples, polled once per tick. Must not block for long nor allocate.
-pub trait Imu {
-    /// The newest sample if one arrived since the last call (`None`: nothing new). `t_s` is
-    /// the loop's time, for backends that stamp samples themselves.
-    fn read_imu(&mut self, t_s: f64) -> Option<ImuSample>;
-
+/// What the loop runs on: the motors ([`MotorBus`]) and the torso IMU ([`Imu`]) of one robot,
+/// and, where a simulator knows it, the ground truth that scores the estimator.
+pub trait Backend: MotorBus + Imu {
     /// The true torso pitch, rad, where the backend knows it (a simulator); `None` on hardware.
     /// Used only to score the estimator, never by the controller.
     fn true_pitch_rad(&self) -> Option<f64> {
@@ -59,7 +42,14 @@ pub fn test_dither_rad_s(t_s: f64) -> f64 {
 }
 
 impl Imu for StaticImu {
-    fn read_imu(&mut self, t_s: f64) -> Option<ImuSample> {
+    /// Without a clock of its own: the sample at the time `out` is stamped with.
+    fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
+        if let Some(sample) = self.read_at(out.t_s) {
+            *out = sample;
+        }
+        Ok(())
+    }
+    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
         let g = crate::estimator::GRAVITY_MPS2;
         Some(ImuSample {
             t_s,
@@ -105,20 +95,13 @@ impl<B: MotorBus, I> MotorBus for WithImu<B, I> {
 }
 
 impl<B, I: Imu> Imu for WithImu<B, I> {
-    fn read_imu(&mut self, t_s: f64) -> Option<ImuSample> {
-        self.imu.read_imu(t_s)
+    fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
+        self.imu.read(out)
     }
-    fn true_pitch_rad(&self) -> Option<f64> {
-        self.imu.true_pitch_rad()
+    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
+        self.imu.read_at(t_s)
     }
 }
 
-/// A simulated bus whose plant also simulates the torso IMU (the robot simulator).
-impl<P: JointPlant + Imu> Imu for SimBus<P> {
-    fn read_imu(&mut self, t_s: f64) -> Option<ImuSample> {
-        self.plant_mut().read_imu(t_s)
-    }
-    fn true_pitch_rad(&self) -> Option<f64> {
-        self.plant().true_pitch_rad()
-    }
-}
+/// A bus and a separate IMU: hardware, or a bench without robot dynamics (no ground truth).
+impl<B: MotorBus, I: Imu> Backend for WithImu<B, I> {}

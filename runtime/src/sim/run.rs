@@ -1,6 +1,6 @@
-//! The runtime on the simulated ADAM: [`drivers::sim::RobotSim`] as the [`JointPlant`](drivers::sim_bus::JointPlant) behind a
+//! The runtime on the simulated ADAM: [`drivers::sim::robot::RobotSim`] as the [`JointPlant`](drivers::sim::plant::JointPlant) behind a
 //! [`SimBus`] (every command and reply goes through the A1 CAN codec and the simulated firmware),
-//! its torso IMU as the runtime's [`crate::Imu`], on a treadmill, under a simulated clock.
+//! its torso IMU as the drivers' [`Imu`](drivers::imu::Imu), on a treadmill, under a simulated clock.
 //!
 //! ```text
 //! gait file initial_state (q⁺, q̇⁺) ─▶ RobotSim (belt = gait speed) ─▶ SimBus<RobotSim>
@@ -11,7 +11,7 @@
 //!
 //! # Faults and the soak
 //! With [`SimWalkOptions::faults`] the backend is a [`FaultySim`]: before each exchange it starts
-//! and ends the faults of the profile's seeded schedule ([`crate::faults`]) at simulated time —
+//! and ends the faults of the profile's seeded schedule ([`crate::sim::faults`]; [`crate::sim::inject`]) at simulated time —
 //! wire faults in the [`SimBus`], motor faults in its firmware, pushes, belt steps and IMU
 //! faults in the [`RobotSim`] — and a [`FaultClock`] wakes the loop late during overrun faults.
 //! Applying a fault allocates nothing (the schedule is built before the loop).
@@ -25,16 +25,18 @@
 //! `runtime/tests/stand_sim.rs`): its first steps are quicker and converge to the orbit over
 //! some 20 steps.
 
-use crate::faults::{Fault, FaultProfile, ScheduledFault};
-use crate::io::Imu;
-use crate::rt_loop::{Clock, LoopOptions, MonotonicClock, RunSummary};
+use crate::backend::Backend;
+use crate::rt_loop::{LoopOptions, MonotonicClock, RunSummary};
+use crate::sim::faults::{Fault, FaultProfile};
+use crate::sim::inject::{FaultClock, FaultySim};
 use crate::{Result, RuntimeError, Setup};
-use core::time::Duration;
-use drivers::a1::{Command, ErrorFlags, MotorId, Reply};
-use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
-use drivers::imu::{ImuFault, ImuNoise};
-use drivers::sim::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
-use drivers::sim_bus::{A1Model, SimBus, SimConfig, SimMotor, WireStats};
+use drivers::imu::ImuNoise;
+use drivers::sim::robot::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
+use drivers::sim::{
+    bus::{SimBus, SimConfig},
+    firmware::{A1Model, SimMotor},
+    wire::WireStats,
+};
 use model::Side;
 use std::path::PathBuf;
 
@@ -126,26 +128,17 @@ impl SimWalkReport {
         self.summary
             .transitions
             .iter()
-            .find(|(_, _, to)| *to == crate::controller::ControlState::Damping)
+            .find(|(_, _, to)| *to == crate::control::ControlState::Damping)
             .map(|(t, _, _)| *t)
     }
 }
 
-/// The runtime's IMU on the simulator's torso IMU (attached with [`RobotSim::attach_imu`]);
-/// stamped with the loop time, since the simulator has just stepped to it.
-impl Imu for RobotSim {
-    fn read_imu(&mut self, t_s: f64) -> Option<crate::ImuSample> {
-        let mut s = drivers::imu::ImuSample::default();
-        drivers::imu::Imu::read(self, &mut s).ok()?;
-        Some(crate::ImuSample {
-            t_s,
-            gyro_pitch_rad_s: s.gyro_pitch_rad_s,
-            accel_x_mps2: s.accel_x_mps2,
-            accel_z_mps2: s.accel_z_mps2,
-        })
-    }
+/// The simulated robot behind its bus: the drivers' IMU on the simulator's torso (attached
+/// with [`RobotSim::attach_imu`]), stamped with the loop time since the simulator has just
+/// stepped to it; and the true torso pitch.
+impl Backend for SimBus<RobotSim> {
     fn true_pitch_rad(&self) -> Option<f64> {
-        Some(self.torso_pitch_rad())
+        Some(self.plant().torso_pitch_rad())
     }
 }
 
@@ -221,7 +214,7 @@ pub fn sim_backend(setup: &Setup, options: &SimWalkOptions) -> Result<SimBus<Rob
     })
 }
 
-fn sim_error(e: &drivers::sim::RobotSimError) -> RuntimeError {
+fn sim_error(e: &drivers::sim::robot::RobotSimError) -> RuntimeError {
     RuntimeError::Gait {
         reason: format!("simulator: {e}"),
     }
@@ -331,207 +324,6 @@ pub fn walk_with_operator(
         report.speed_mps = length_sum_m / duration_sum_s;
     }
     Ok(report)
-}
-
-/// The simulated robot with faults applied on schedule: a loop backend ([`MotorBus`] + [`Imu`]).
-///
-/// Before each exchange, at the simulated time of the period about to run, faults whose end has
-/// come are healed, then faults whose start has come are applied. A hot motor is not cooled at
-/// the end of its fault (the thermal model cools it); a push ends by itself. Overlapping faults
-/// of one kind: the first to end heals both (random faults never overlap).
-pub struct FaultySim {
-    bus: SimBus<RobotSim>,
-    schedule: Vec<ScheduledFault>,
-    ended: Vec<bool>,
-    next: usize,
-    first_open: usize,
-    motors: [MotorId; 4],
-    belt_speed_mps: f64,
-    half_period_s: f64,
-    started: u64,
-}
-
-impl FaultySim {
-    /// Wrap `bus` with the wire faults of `profile` and the faults of `schedule`.
-    pub fn new(
-        setup: &Setup,
-        mut bus: SimBus<RobotSim>,
-        profile: &FaultProfile,
-        schedule: Vec<ScheduledFault>,
-    ) -> Result<Self> {
-        bus.set_wire_faults(profile.wire.to_wire_faults())
-            .map_err(|(field, value)| RuntimeError::InvalidField {
-                origin: "fault profile".into(),
-                field: format!("wire.{field}"),
-                value: value.to_string(),
-                reason: "out of range".into(),
-            })?;
-        let leg = &setup.config.leg_motors;
-        let id = |slot: usize| leg[slot].spec(&format!("leg_motors[{slot}]")).map(|s| s.id);
-        let motors = [id(0)?, id(1)?, id(2)?, id(3)?];
-        Ok(Self {
-            belt_speed_mps: bus.plant().config().belt_speed_mps,
-            half_period_s: 0.5 / bus.config().control_rate_hz,
-            ended: vec![false; schedule.len()],
-            schedule,
-            next: 0,
-            first_open: 0,
-            motors,
-            started: 0,
-            bus,
-        })
-    }
-
-    /// Heal the faults that have ended and apply those that have begun at `t_s`.
-    fn apply(&mut self, t_s: f64) {
-        let now = t_s + self.half_period_s;
-        for i in self.first_open..self.next {
-            if !self.ended[i] && self.schedule[i].end_s <= now {
-                self.ended[i] = true;
-                self.set(self.schedule[i].fault, false);
-            }
-        }
-        while self.first_open < self.next && self.ended[self.first_open] {
-            self.first_open += 1;
-        }
-        while self.next < self.schedule.len() && self.schedule[self.next].start_s <= now {
-            let f = self.schedule[self.next];
-            self.next += 1;
-            self.started += 1;
-            self.set(f.fault, true);
-            if let Fault::Push {
-                force_x_n,
-                force_z_n,
-            } = f.fault
-            {
-                // Non-finite forces were refused by the profile's validation.
-                let _ = self
-                    .bus
-                    .plant_mut()
-                    .push([force_x_n, force_z_n], f.end_s - f.start_s);
-            }
-        }
-    }
-
-    /// Apply (`on`) or heal one fault.
-    fn set(&mut self, fault: Fault, on: bool) {
-        let imu = |f| if on { f } else { ImuFault::None };
-        match fault {
-            Fault::SilentMotor { slot } => {
-                self.bus.set_silent(self.motors[slot], on);
-            }
-            Fault::HotMotor {
-                slot,
-                temperature_c,
-            } => {
-                if on {
-                    self.bus.set_temperature_c(self.motors[slot], temperature_c);
-                }
-            }
-            Fault::MotorFlags { slot, flags } => {
-                let flags = if on {
-                    ErrorFlags(flags)
-                } else {
-                    ErrorFlags::NONE
-                };
-                self.bus.set_error_flags(self.motors[slot], flags);
-            }
-            Fault::ImuDropout => self.bus.plant_mut().set_imu_fault(imu(ImuFault::Dropout)),
-            Fault::ImuSpike { gyro_rad_s } => self
-                .bus
-                .plant_mut()
-                .set_imu_fault(imu(ImuFault::Spike { gyro_rad_s })),
-            Fault::ImuFrozen => self.bus.plant_mut().set_imu_fault(imu(ImuFault::Frozen)),
-            Fault::BeltSpeed { speed_mps } => {
-                let v = if on { speed_mps } else { self.belt_speed_mps };
-                // A finite speed cannot be refused; a faulted simulator reports itself
-                // through `SimEvent::Fault`.
-                let _ = self.bus.plant_mut().set_belt_speed(v);
-            }
-            // The clock's fault; a push ends by itself.
-            Fault::Overrun { .. } | Fault::Push { .. } => {}
-        }
-    }
-}
-
-impl MotorBus for FaultySim {
-    fn state(&self) -> Lifecycle {
-        self.bus.state()
-    }
-    fn bus_count(&self) -> usize {
-        self.bus.bus_count()
-    }
-    fn configure(&mut self, motors: &[MotorSpec]) -> drivers::bus::Result<()> {
-        self.bus.configure(motors)
-    }
-    fn activate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.activate()
-    }
-    fn exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> drivers::bus::Result<ExchangeReport> {
-        let t_s = self.bus.time_s();
-        self.apply(t_s);
-        self.bus.exchange(commands, replies, budget)
-    }
-    fn deactivate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.deactivate()
-    }
-}
-
-impl Imu for FaultySim {
-    fn read_imu(&mut self, t_s: f64) -> Option<crate::ImuSample> {
-        self.bus.read_imu(t_s)
-    }
-    fn true_pitch_rad(&self) -> Option<f64> {
-        self.bus.true_pitch_rad()
-    }
-}
-
-/// Simulated time that wakes the loop late inside overrun faults: a deadline `d` in
-/// `[start, end)` of an [`Fault::Overrun`] wakes at `d + late`. Outside them it is
-/// [`crate::rt_loop::SimulatedClock`]: sleeping jumps to the deadline, time never goes back.
-#[derive(Clone, Debug, Default)]
-pub struct FaultClock {
-    now_s: f64,
-    windows: Vec<(f64, f64, f64)>,
-}
-
-impl FaultClock {
-    /// The overrun faults of `schedule`.
-    pub fn new(schedule: &[ScheduledFault]) -> Self {
-        let windows = schedule
-            .iter()
-            .filter_map(|f| match f.fault {
-                Fault::Overrun { late_ms } => Some((f.start_s, f.end_s, late_ms * 1e-3)),
-                _ => None,
-            })
-            .collect();
-        Self {
-            now_s: 0.0,
-            windows,
-        }
-    }
-}
-
-impl Clock for FaultClock {
-    fn now_s(&mut self) -> f64 {
-        self.now_s
-    }
-    fn sleep_until(&mut self, deadline_s: f64) {
-        let late_s = self
-            .windows
-            .iter()
-            .find(|(a, b, _)| (*a..*b).contains(&deadline_s))
-            .map_or(0.0, |w| w.2);
-        self.now_s = self.now_s.max(deadline_s + late_s);
-    }
-    fn is_simulated(&self) -> bool {
-        true
-    }
 }
 
 /// How long the soak lets the robot lie in Damping after a trip before it resets, s.
@@ -809,10 +601,14 @@ impl std::fmt::Display for SimWalkReport {
 pub fn joint_bench_backend(
     setup: &Setup,
     start_rad: &[f64],
-    imu: crate::io::StaticImu,
-) -> Result<crate::io::WithImu<SimBus<drivers::sim_bus::InertiaDampingPlant>, crate::io::StaticImu>>
-{
-    use drivers::sim_bus::{InertiaDampingPlant, RigidJoint};
+    imu: crate::backend::StaticImu,
+) -> Result<
+    crate::backend::WithImu<
+        SimBus<drivers::sim::plant::InertiaDampingPlant>,
+        crate::backend::StaticImu,
+    >,
+> {
+    use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
     let joint = RigidJoint {
         inertia_kg_m2: 0.05,
         damping_nm_s_per_rad: 0.1,
@@ -840,7 +636,7 @@ pub fn joint_bench_backend(
         model: A1Model::default(),
         seed: 7,
     };
-    Ok(crate::io::WithImu {
+    Ok(crate::backend::WithImu {
         bus: SimBus::new(config, plant).map_err(|e| invalid(format!("joint bench bus: {e}")))?,
         imu,
     })

@@ -1,4 +1,4 @@
-//! A guard for the MCAP readers of [`crate::log_read`]: a damaged length field (a chunk's
+//! A guard for the MCAP readers of [`crate::telemetry::log_read`]: a damaged length field (a chunk's
 //! uncompressed size, a record's length) makes the `mcap` reader try to allocate that many bytes,
 //! and an allocation of exabytes aborts the process. Before any reader runs, one linear pass with
 //! a record-length limit refuses such a file with an error that names it.

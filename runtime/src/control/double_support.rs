@@ -10,7 +10,7 @@
 //! Frames: positions are world axes `[x, z]`, relative to the stance foot. Everything here
 //! works on fixed-size arrays and never allocates.
 
-use crate::controller::LEG_SLOTS;
+use crate::slots::LEG_SLOTS;
 use model::robot::{Legs, PlanarModel, Side, MAX_DOF};
 
 /// Torso origin x, z (m) and pitch (rad), relative to the stance foot.
@@ -414,7 +414,7 @@ mod tests {
 
     #[test]
     fn gravity_torques_hold_the_simulated_robot_still_in_double_support() {
-        use drivers::sim::{RobotSim, RobotSimConfig};
+        use drivers::sim::robot::{RobotSim, RobotSimConfig};
         let fixture = Fixture::new();
         let g = fixture.geometry();
         let model = &fixture.setup.model;

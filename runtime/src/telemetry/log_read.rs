@@ -18,7 +18,7 @@
 //! println!("{info}");
 //! ```
 
-use crate::log::{CHANNELS, LOG_SCHEMA_VERSION, SCHEMA_VERSION_KEY};
+use crate::telemetry::log::{CHANNELS, LOG_SCHEMA_VERSION, SCHEMA_VERSION_KEY};
 use crate::{Result, RuntimeError};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -172,7 +172,7 @@ pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
     if !bytes.starts_with(MCAP_MAGIC) {
         return Err(log_err(path, "not an MCAP file (no leading MCAP magic)"));
     }
-    crate::log_guard::check_lengths(path, &bytes)?;
+    crate::telemetry::log_guard::check_lengths(path, &bytes)?;
     Ok(bytes)
 }
 
@@ -511,11 +511,12 @@ pub fn joint_series(path: &Path) -> Result<JointSeries> {
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::controller::{ControlState, SlotLayout};
-    use crate::log::{start, LogContext, LogRecord};
+    use crate::control::ControlState;
     use crate::safety::Trip;
-    use crate::sim_run::{walk, SimWalkOptions};
-    use crate::telemetry::StateSample;
+    use crate::sim::run::{walk, SimWalkOptions};
+    use crate::slots::SlotLayout;
+    use crate::telemetry::log::{start, LogContext, LogRecord};
+    use crate::telemetry::sample::StateSample;
     use crate::Setup;
 
     fn temp_path(tag: &str) -> PathBuf {
@@ -580,7 +581,7 @@ mod tests {
         let setup = Setup::shipped().unwrap();
         let gait = info.gait.as_ref().unwrap();
         assert_eq!(gait.step_length_m, setup.gait.step_length_m);
-        assert_eq!(info.attachments, crate::log::ATTACHMENTS);
+        assert_eq!(info.attachments, crate::telemetry::log::ATTACHMENTS);
         let text = info.to_string();
         assert!(text.contains("duration  0.299 s"), "{text}");
         std::fs::remove_file(&path).unwrap();

@@ -1,7 +1,8 @@
 //! The per-tick state sample: a fixed-size `#[repr(C)]` record built after every tick, published
 //! zero-copy over iceoryx2 (feature `iceoryx2`, on by default) and queued to the MCAP logger.
 
-use crate::controller::{ControlState, JointCommand, TickInput, TickOutput, OUTPUTS, SLOTS};
+use crate::control::{ControlState, JointCommand, TickInput, TickOutput};
+use crate::slots::{OUTPUTS, SLOTS};
 use crate::{Result, RuntimeError};
 #[cfg(feature = "iceoryx2")]
 use iceoryx2::prelude::ZeroCopySend;

@@ -1,0 +1,631 @@
+//! The controller: pure, sans-IO logic of one control tick.
+//!
+//! ```text
+//! TickInput { t_s, motor samples[14], IMU sample?, operator command?, overrun streak }
+//!   │  motor → model angles (direction, offset)        IMU → PitchEstimator (θ̂, θ̂̇, b̂)
+//!   ▼
+//! operator command → state machine (Idle → Ramp → Stand → Walk → Stop → Stand … Damping)
+//!   ▼
+//! SafetyMonitor::check ── trip? ──▶ Damping (latched, reason in Status::trip)
+//!   ▼
+//! Walk/Stop: q = [0, 0, θ̂, legs…] → θ(q), θ̇ (model::phase) → τ, τ̇ → y^d(τ), ẏ^d = y^d'(τ)·τ̇
+//!            swing-foot height + τ ≥ τ_switch, debounced → stance switch (relabel outputs)
+//! Ramp: minimum-jerk move from the measured pose to y^d(0); Stand: hold y^d(0)
+//! Walk from Stand: 1 s launch in double support, then the first step blends into y^d(τ)
+//! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
+//!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles
+//!   ▼
+//! TickOutput { commands[14] (PD or damping, motor side), status }
+//! ```
+//! `tick` never allocates, locks, sleeps or reads a clock: time is `TickInput::t_s`.
+//!
+//! Motor slots: 0..4 are the leg joints (left hip, left knee, right hip, right knee); 4..14 the
+//! held joints of the config, in order. Slots without a motor (fewer held joints, or held
+//! motors absent in simulation) have `present == false` in the [`SlotLayout`].
+//!
+//! # Walk from Stand: a launch
+//! At rest in double support the state-based phase has no momentum to run on. On Walk the
+//! controller first carries the torso forward with both feet down (1 s: a quintic from rest
+//! to 4 cm behind the stance foot, arriving at 0.2 m/s;
+//! joint targets by `double_support` inverse kinematics, gravity fed forward, PI feedback on
+//! the measured torso pose), then lifts the rear foot: the first step starts at the measured
+//! phase, its outputs blending (minimum jerk) from the launch's end pose into y^d(τ). From
+//! there the gait's stable orbit takes over (`runtime/tests/stand_sim.rs`).
+//!
+//! # Stop: why a braking step
+//! The gait lands each step with the torso moving at ~0.40 m/s. With point feet, double support
+//! can only bring the robot to rest if its capture point `x + ẋ/ω` (ω = √(g/h)) lies between the
+//! feet; over a 0.15 m step it lies about 3 cm beyond the front foot, so holding any pose after
+//! a normal step vaults the robot over it (measured). The braking step lands the front foot
+//! `walk.stop_step_length_m` (0.30 m) ahead instead: the step's stance-leg angle runs on to the
+//! braking pose's θ (so τ still ends at 1) and, from τ = 0.3, the outputs blend (minimum jerk)
+//! from y^d(τ) into that pose, found by inverse kinematics at start-up
+//! (`double_support`: both feet down, the torso where the gait's first pose has it relative to
+//! the feet, lowered to keep the legs' reach). The longer landing loses more speed in the
+//! impact and leaves the capture point inside the feet; Stand then holds the landed joint
+//! angles and the robot rocks from foot to foot a few times and comes to rest
+//! (`runtime/tests/stop_sim.rs`).
+
+use super::double_support::Geometry;
+use super::gait_table::{side_index, GaitTable};
+use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
+use super::transitions::{
+    braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
+    MIN_JERK_PEAK_RATE, PLANNED_PITCH_SIGMA_RAD, STAND_DELAY_S,
+};
+use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
+use crate::estimator::{EstimatorParams, PitchEstimator};
+use crate::safety::{SafetyInput, SafetyMonitor, Trip};
+use crate::slots::{MotorSample, SlotLayout, LEG_SLOTS, OUTPUTS, SLOTS};
+use crate::{Result, RuntimeError};
+use model::gait::GaitFile;
+use model::robot::{Legs, MAX_DOF};
+use model::{PlanarModel, Side};
+
+mod commands;
+#[cfg(test)]
+mod tests;
+mod walk;
+
+/// The controller. Build once at start-up ([`Controller::new`]); call [`Controller::tick`]
+/// every period.
+#[derive(Clone, Debug)]
+pub struct Controller {
+    model: PlanarModel,
+    legs: Legs,
+    dof: usize,
+    q_template: [f64; MAX_DOF],
+    leg_coord: [usize; LEG_SLOTS],
+    gait: GaitTable,
+    layout: SlotLayout,
+    phase_source: PhaseSource,
+    kp: [f64; LEG_SLOTS],
+    kd: [f64; LEG_SLOTS],
+    feedforward_nm: [f64; OUTPUTS],
+    plan_feedforward_scale: f64,
+    damping_kd: f64,
+    ramp_min_duration_s: f64,
+    ramp_max_speed_rad_s: f64,
+    switch_min_phase: f64,
+    touchdown_height_m: f64,
+    touchdown_max_descent_mps: f64,
+    touchdown_below_m: f64,
+    touchdown_impact_accel_mps2: f64,
+    impact_min_phase: f64,
+    reference_lead_s: f64,
+    touchdown_debounce_ticks: u32,
+    max_phase_rate_per_s: f64,
+    phase_observer_hz: f64,
+    estimator: PitchEstimator,
+    accel_while_walking: bool,
+    touchdown_pitch_sigma_rad: f64,
+    safety: SafetyMonitor,
+    // Run-time state.
+    state: ControlState,
+    stance: Side,
+    steps: u32,
+    step_start_t_s: f64,
+    /// A step lasting longer than this trips [`Trip::StepTimeout`], s.
+    step_timeout_s: f64,
+    touchdown_ticks: u32,
+    /// (time, swing-foot height) at the previous walking tick.
+    last_foot: Option<(f64, f64)>,
+    /// Phase observer state: (τ̂, τ̂̇, time of the last update) once walking.
+    phase_hat: Option<(f64, f64, f64)>,
+    ramp: Ramp,
+    /// Stand after a Stop holds these leg joint angles, model rad (`None`: Stand holds the
+    /// gait's first pose, as after Ramp).
+    stand_hold: Option<[f64; LEG_SLOTS]>,
+    /// When the braking step of a Stop touched down (Stand starts [`STAND_DELAY_S`] later).
+    stop_touchdown_t_s: Option<f64>,
+    /// The braking step of a Stop: its touchdown pose and stance-leg angle.
+    lunge: Lunge,
+    /// The current step is the braking step.
+    braking: bool,
+    /// Walk was asked for in Stand: the launch starts at this tick.
+    launch_requested: bool,
+    launch: Option<Launch>,
+    start_blend: Option<StartBlend>,
+    /// Longest hip-to-foot distance the legs reach (thigh + shin), m.
+    leg_reach_m: f64,
+    trip: Option<Trip>,
+    motors: [MotorSample; SLOTS],
+    last_imu_t_s: Option<f64>,
+}
+
+impl Controller {
+    /// A controller for `gait` on `model` with `config`; `with_held` = whether the held
+    /// motors are driven (false in simulations without them). Allocates; call at start-up.
+    pub fn new(
+        config: &RuntimeConfig,
+        gait: &GaitFile,
+        model: PlanarModel,
+        with_held: bool,
+    ) -> Result<Self> {
+        config.validate("runtime config")?;
+        model.check_capacity()?;
+        let legs = model.legs()?;
+        let dof = model.dof();
+        let nominal = model.nominal_pose()?;
+        let q = model.with_design(
+            &nominal,
+            gait.design.thigh_length_m,
+            gait.design.shin_length_m,
+        )?;
+        let mut q_template = [0.0; MAX_DOF];
+        q_template[..dof].copy_from_slice(&q);
+        q_template[0] = 0.0;
+        q_template[1] = 0.0;
+        let mut leg_coord = [0; LEG_SLOTS];
+        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
+            leg_coord[k] = model.joints[model.require_joint(name)?].coordinate;
+        }
+        let gait_table = GaitTable::new(gait, &model, &legs)?;
+        if config.walk.phase == PhaseSource::StateBased && !gait_table.theta_plus_rad.is_finite() {
+            return Err(RuntimeError::Gait {
+                reason: "walk.phase = state_based needs a state-based gait (θ⁺, θ⁻)".into(),
+            });
+        }
+        if config.gains.plan_feedforward_scale > 0.0 && gait_table.ff_len == 0 {
+            return Err(RuntimeError::Gait {
+                reason: format!(
+                    "gains.plan_feedforward_scale = {} but the gait file has no feedforward \
+                     table: re-plan it with `adam plan`, or set the scale to 0 (PD only)",
+                    config.gains.plan_feedforward_scale
+                ),
+            });
+        }
+        let geometry = Geometry {
+            model: &model,
+            legs: &legs,
+            dof,
+            q_template: &q_template,
+            leg_coord: &leg_coord,
+        };
+        let stop_step_m = config.walk.stop_step_length_m;
+        let lunge = braking_touchdown(&geometry, &gait_table, stop_step_m).ok_or_else(|| {
+            RuntimeError::InvalidField {
+                origin: "runtime config".into(),
+                field: "walk.stop_step_length_m".into(),
+                value: stop_step_m.to_string(),
+                reason: format!(
+                    "the braking step's touchdown pose is out of the legs' reach \
+                         (thigh {:.3} m, shin {:.3} m)",
+                    gait.design.thigh_length_m, gait.design.shin_length_m
+                ),
+            }
+        })?;
+        let layout = SlotLayout::new(config, with_held);
+        let zero_ramp = Ramp {
+            start_t_s: 0.0,
+            duration_s: 0.0,
+            from: [0.0; SLOTS],
+            to: [0.0; SLOTS],
+        };
+        Ok(Self {
+            legs,
+            dof,
+            q_template,
+            leg_coord,
+            gait: gait_table,
+            layout,
+            phase_source: config.walk.phase,
+            kp: config.gains.kp_nm_per_rad,
+            kd: config.gains.kd_nm_s_per_rad,
+            feedforward_nm: config.gains.walk_feedforward_nm,
+            plan_feedforward_scale: config.gains.plan_feedforward_scale,
+            damping_kd: config.gains.damping_kd_nm_s_per_rad,
+            ramp_min_duration_s: config.ramp.min_duration_s,
+            ramp_max_speed_rad_s: config.ramp.max_speed_rad_s,
+            switch_min_phase: config.walk.switch_min_phase,
+            touchdown_height_m: config.walk.touchdown_height_m,
+            touchdown_max_descent_mps: config.walk.touchdown_max_descent_mps,
+            touchdown_below_m: config.walk.touchdown_below_m,
+            touchdown_impact_accel_mps2: config.walk.touchdown_impact_accel_mps2,
+            impact_min_phase: config.walk.impact_min_phase,
+            reference_lead_s: config.walk.reference_lead_s,
+            touchdown_debounce_ticks: config.walk.touchdown_debounce_ticks,
+            max_phase_rate_per_s: config.walk.max_phase_rate_per_s,
+            phase_observer_hz: config.walk.phase_observer_hz,
+            estimator: PitchEstimator::new(EstimatorParams::from(&config.estimator)),
+            accel_while_walking: config.estimator.accel_while_walking,
+            touchdown_pitch_sigma_rad: config.estimator.touchdown_pitch_sigma_rad,
+            safety: SafetyMonitor::new(
+                config.safety.clone(),
+                config.loop_.max_overrun_streak,
+                layout,
+            ),
+            state: ControlState::Idle,
+            stance: gait.stance_leg,
+            steps: 0,
+            step_start_t_s: 0.0,
+            step_timeout_s: config.safety.max_step_duration_factor * gait.step_duration_s,
+            touchdown_ticks: 0,
+            last_foot: None,
+            phase_hat: None,
+            ramp: zero_ramp,
+            stand_hold: None,
+            stop_touchdown_t_s: None,
+            lunge,
+            braking: false,
+            launch_requested: false,
+            launch: None,
+            start_blend: None,
+            leg_reach_m: gait.design.thigh_length_m + gait.design.shin_length_m,
+            trip: None,
+            motors: [MotorSample::default(); SLOTS],
+            last_imu_t_s: None,
+            model,
+        })
+    }
+
+    /// Current state.
+    pub fn state(&self) -> ControlState {
+        self.state
+    }
+
+    /// Slot layout.
+    pub fn layout(&self) -> &SlotLayout {
+        &self.layout
+    }
+
+    /// Current stance leg.
+    pub fn stance(&self) -> Side {
+        self.stance
+    }
+
+    /// The latched trip, if any.
+    pub fn trip(&self) -> Option<Trip> {
+        self.trip
+    }
+
+    /// Enter Walk at `t_s` with the gait's first stance leg, as if the previous step had just
+    /// ended: for a backend that starts in the gait's planned post-impact state (a simulator set
+    /// to the gait file's `initial_state`), where Ramp and Stand would have no meaning. The pitch
+    /// estimator starts from the planned pitch: mid-step, the accelerometer does not see gravity
+    /// alone. Only from Idle with no latched trip; returns whether Walk was entered.
+    pub fn begin_walk_at_step_start(&mut self, t_s: f64, status: &mut Status) -> bool {
+        if self.state != ControlState::Idle || self.trip.is_some() {
+            return false;
+        }
+        if let Some((pitch_rad, rate_rad_s)) = self.gait.initial_pitch {
+            self.estimator
+                .initialize(pitch_rad, rate_rad_s, PLANNED_PITCH_SIGMA_RAD);
+        }
+        self.stance = self.gait.first_stance;
+        self.step_start_t_s = t_s;
+        self.touchdown_ticks = 0;
+        self.last_foot = None;
+        self.phase_hat = None;
+        self.steps = 0;
+        self.enter(ControlState::Walk, status);
+        true
+    }
+
+    /// The gait's first pose by slot (motor side for every slot), as Ramp targets it.
+    pub fn first_pose(&self) -> [f64; SLOTS] {
+        self.stand_pose(self.gait.first_stance)
+    }
+
+    fn stand_pose(&self, stance: Side) -> [f64; SLOTS] {
+        let mut pose = self.layout.held_center_rad;
+        for i in 0..OUTPUTS {
+            let slot = self.gait.out_slot[side_index(stance)][i];
+            let (y, _) = self.gait.eval(i, 0.0);
+            pose[slot] = self.to_motor(slot, y);
+        }
+        pose
+    }
+
+    fn to_motor(&self, slot: usize, model_rad: f64) -> f64 {
+        self.layout.motor_rad(slot, model_rad)
+    }
+
+    fn to_model(&self, slot: usize, motor_rad: f64) -> f64 {
+        self.layout.model_rad(slot, motor_rad)
+    }
+
+    fn enter(&mut self, to: ControlState, status: &mut Status) {
+        if to != self.state {
+            status.transition = Some((self.state, to));
+            self.state = to;
+        }
+    }
+
+    fn begin_ramp(&mut self, t_s: f64) {
+        let to = self.stand_pose(self.stance);
+        let mut from = to;
+        let mut largest = 0.0_f64;
+        for slot in 0..SLOTS {
+            if self.layout.present[slot] {
+                from[slot] = self.motors[slot].q_rad;
+                largest = largest.max((to[slot] - from[slot]).abs());
+            }
+        }
+        // Minimum-jerk peak speed is 1.875·Δq/T: lengthen T to respect the speed limit.
+        let duration_s = self
+            .ramp_min_duration_s
+            .max(MIN_JERK_PEAK_RATE * largest / self.ramp_max_speed_rad_s);
+        self.ramp = Ramp {
+            start_t_s: t_s,
+            duration_s,
+            from,
+            to,
+        };
+    }
+
+    fn handle_operator(&mut self, cmd: OperatorCommand, t_s: f64, status: &mut Status) {
+        use ControlState as S;
+        match (cmd, self.state) {
+            (OperatorCommand::EStop, _) => {
+                if self.trip.is_none() {
+                    self.trip = Some(Trip::EStop);
+                    status.new_trip = true;
+                }
+                self.enter(S::Damping, status);
+            }
+            (OperatorCommand::Damp, _) => self.enter(S::Damping, status),
+            (OperatorCommand::Start, S::Idle) => {
+                self.stance = self.gait.first_stance;
+                self.stand_hold = None;
+                self.begin_ramp(t_s);
+                self.enter(S::Ramp, status);
+            }
+            (OperatorCommand::Walk, S::Stand) => {
+                self.step_start_t_s = t_s;
+                self.touchdown_ticks = 0;
+                self.steps = 0;
+                self.launch_requested = true;
+                self.enter(S::Walk, status);
+            }
+            (OperatorCommand::Stop, S::Walk) => {
+                self.stop_touchdown_t_s = None;
+                self.braking = false;
+                self.enter(S::Stop, status);
+            }
+            (OperatorCommand::Reset, S::Damping) => {
+                self.trip = None;
+                self.safety.reset_counters();
+                self.enter(S::Idle, status);
+            }
+            _ => {} // not meaningful in this state: ignored
+        }
+    }
+
+    /// One control tick. Never allocates, locks, sleeps or reads a clock.
+    pub fn tick(&mut self, input: &TickInput, out: &mut TickOutput) {
+        let t = input.t_s;
+        let status = &mut out.status;
+        status.transition = None;
+        status.new_trip = false;
+        // Motors: keep the last known values of silent ones.
+        for slot in 0..SLOTS {
+            let m = input.motors[slot];
+            if m.fresh {
+                self.motors[slot] = m;
+            } else {
+                self.motors[slot].fresh = false;
+            }
+        }
+        let mut leg_q = [0.0; LEG_SLOTS];
+        let mut leg_dq = [0.0; LEG_SLOTS];
+        for k in 0..LEG_SLOTS {
+            leg_q[k] = self.to_model(k, self.motors[k].q_rad);
+            leg_dq[k] = self.layout.direction[k] * self.motors[k].dq_rad_s;
+        }
+        // Estimator.
+        // An implausible sample (a glitch; safety counts them) is not integrated.
+        if let Some(imu) = input.imu.as_ref().filter(|i| self.safety.gyro_plausible(i)) {
+            let dt = self.last_imu_t_s.map_or(0.0, |t0| imu.t_s - t0);
+            let walking = matches!(self.state, ControlState::Walk | ControlState::Stop);
+            self.estimator.update_with(
+                imu.gyro_pitch_rad_s,
+                imu.accel_x_mps2,
+                imu.accel_z_mps2,
+                dt,
+                !walking || self.accel_while_walking,
+            );
+            self.last_imu_t_s = Some(imu.t_s);
+        }
+        // Operator, then safety (a trip overrides any request).
+        if let Some(cmd) = input.operator {
+            self.handle_operator(cmd, t, status);
+        }
+        let safety_in = SafetyInput {
+            t_s: t,
+            motors: &self.motors,
+            leg_q_rad: &leg_q,
+            imu: input.imu.as_ref(),
+            pitch_rad: self.estimator.pitch_rad(),
+            overrun_streak: input.overrun_streak,
+        };
+        if let Some(trip) = self.safety.check(&safety_in, self.state.is_driven()) {
+            if self.trip.is_none() {
+                self.trip = Some(trip);
+                status.new_trip = true;
+            }
+            self.enter(ControlState::Damping, status);
+        }
+        // A stalled walk: the step has lasted several times the gait's.
+        if matches!(self.state, ControlState::Walk | ControlState::Stop) {
+            let elapsed_s = t - self.step_start_t_s;
+            if elapsed_s > self.step_timeout_s {
+                if self.trip.is_none() {
+                    self.trip = Some(Trip::StepTimeout {
+                        elapsed_s,
+                        limit_s: self.step_timeout_s,
+                    });
+                    status.new_trip = true;
+                }
+                self.enter(ControlState::Damping, status);
+            }
+        }
+        if self.state == ControlState::Ramp && t - self.ramp.start_t_s >= self.ramp.duration_s {
+            self.enter(ControlState::Stand, status);
+        }
+
+        // Commands.
+        let mut y_des = [0.0; OUTPUTS];
+        let mut dy_des = [0.0; OUTPUTS];
+        let (mut phase, mut phase_rate, mut foot_h) = (0.0, 0.0, f64::NAN);
+        match self.state {
+            ControlState::Idle | ControlState::Damping => {
+                out.commands = [JointCommand::damping(self.damping_kd); SLOTS];
+            }
+            ControlState::Ramp => {
+                let r = self.ramp;
+                let u = if r.duration_s > 0.0 {
+                    (t - r.start_t_s) / r.duration_s
+                } else {
+                    1.0
+                };
+                let (s, ds_du) = min_jerk(u);
+                let du_dt = if r.duration_s > 0.0 {
+                    1.0 / r.duration_s
+                } else {
+                    0.0
+                };
+                for slot in 0..SLOTS {
+                    let dq = r.to[slot] - r.from[slot];
+                    out.commands[slot] =
+                        self.pd(slot, r.from[slot] + s * dq, dq * ds_du * du_dt, 0.0);
+                }
+            }
+            ControlState::Stand => self.stand_commands(&mut out.commands),
+            ControlState::Walk if self.launch_requested || self.launch.is_some() => {
+                if self.launch_requested {
+                    self.launch_requested = false;
+                    self.begin_launch(t, &leg_q, &leg_dq);
+                }
+                if self
+                    .launch
+                    .is_some_and(|l| t - l.start_t_s < LAUNCH_DURATION_S)
+                {
+                    self.launch_commands(t, &leg_q, &leg_dq, &mut out.commands);
+                    // The phase is reported (the stance-leg angle), not yet used.
+                    let eval = self.walk_references(t, &leg_q, &leg_dq);
+                    (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
+                } else {
+                    let eval = self.walk_references(t, &leg_q, &leg_dq);
+                    let stance = side_index(self.stance);
+                    let mut offset = [0.0; OUTPUTS];
+                    for (i, o) in offset.iter_mut().enumerate() {
+                        *o = leg_q[self.gait.out_slot[stance][i]] - eval.y[i];
+                    }
+                    self.start_blend = Some(StartBlend {
+                        from_phase: eval.phase.clamp(0.0, 1.0),
+                        offset,
+                    });
+                    // The first step starts now (the step timeout and a time-based phase
+                    // count from here).
+                    self.step_start_t_s = t;
+                    self.launch = None;
+                    self.last_foot = None;
+                    // The same measured phase, now with the blend.
+                    let eval = self.references(eval.phase, eval.phase_rate, eval.foot_height_m);
+                    (y_des, dy_des) = (eval.y, eval.dy);
+                    (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
+                    self.walk_commands(&eval, &mut out.commands);
+                }
+            }
+            ControlState::Walk | ControlState::Stop => {
+                let mut eval = self.walk_references(t, &leg_q, &leg_dq);
+                self.observe_phase(t, &mut eval);
+                // The foot is down once it stops descending near the ground (a kinematic
+                // height alone would switch millimetres early, before the impact).
+                let descent_mps = match self.last_foot {
+                    Some((t0, h0)) if t > t0 => (h0 - eval.foot_height_m) / (t - t0),
+                    _ => f64::INFINITY,
+                };
+                self.last_foot = Some((t, eval.foot_height_m));
+                // The impact itself: a spike of the accelerometer (the IMU averages over its
+                // sample period, so the impulse shows in one sample).
+                let impact = input.imu.as_ref().is_some_and(|imu| {
+                    (imu.accel_x_mps2.hypot(imu.accel_z_mps2) - crate::estimator::GRAVITY_MPS2)
+                        .abs()
+                        >= self.touchdown_impact_accel_mps2
+                });
+                // The impact spike late in the step, with the swing foot near the ground, is the
+                // touchdown, even a little before τ = 1 (the feet are both down only then: the
+                // pitch that levels them is measured at this very sample).
+                let near = eval.foot_height_m <= self.touchdown_height_m;
+                let impact_switch = impact && near && eval.phase >= self.impact_min_phase;
+                // Without a spike: τ ≥ τ_switch and the foot stopped descending, or lies below
+                // the stance foot (the old stance foot lifting off after the impact), debounced.
+                let landed = descent_mps <= self.touchdown_max_descent_mps
+                    || eval.foot_height_m <= -self.touchdown_below_m;
+                if eval.touchdown && landed {
+                    self.touchdown_ticks += 1;
+                } else {
+                    self.touchdown_ticks = 0;
+                }
+                if impact_switch || self.touchdown_ticks >= self.touchdown_debounce_ticks {
+                    if impact_switch {
+                        let pitch = self.touchdown_pitch_rad(&leg_q);
+                        self.estimator
+                            .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+                    }
+                    // Impact: relabel the legs and start the next step.
+                    self.stance = self.stance.other();
+                    self.start_blend = None;
+                    self.step_start_t_s = t;
+                    self.touchdown_ticks = 0;
+                    self.last_foot = None;
+                    self.steps = self.steps.saturating_add(1);
+                    // Stop: the step under way ends, then the braking step, then Stand.
+                    if self.state == ControlState::Stop {
+                        if self.braking {
+                            self.stop_touchdown_t_s = Some(t);
+                        }
+                        self.braking = !self.braking;
+                    }
+                    // The new step starts at the measured phase, at the speed of the old one.
+                    let rate = self.phase_hat.map_or(0.0, |(_, r, _)| r);
+                    eval = self.walk_references(t, &leg_q, &leg_dq);
+                    self.phase_hat = Some((eval.phase, rate, t));
+                    self.observe_phase(t, &mut eval);
+                }
+                (y_des, dy_des) = (eval.y, eval.dy);
+                (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
+                // The braking step has landed: once the motors report the post-impact pose (the
+                // replies lag the impact by a tick), Stand holds it.
+                if self.state == ControlState::Stop
+                    && self
+                        .stop_touchdown_t_s
+                        .is_some_and(|t0| t - t0 >= STAND_DELAY_S - 1e-9)
+                {
+                    self.stand_hold = Some(leg_q);
+                    self.enter(ControlState::Stand, status);
+                }
+                if self.state == ControlState::Stand {
+                    self.stand_commands(&mut out.commands);
+                } else {
+                    self.walk_commands(&eval, &mut out.commands);
+                }
+            }
+        }
+        let stance = side_index(self.stance);
+        let mut y_act = [0.0; OUTPUTS];
+        for (i, y) in y_act.iter_mut().enumerate() {
+            *y = leg_q[self.gait.out_slot[stance][i]];
+        }
+        *status = Status {
+            state: self.state,
+            transition: status.transition,
+            stance: self.stance,
+            steps: self.steps,
+            phase,
+            phase_rate_per_s: phase_rate,
+            y_des_rad: y_des,
+            dy_des_rad_s: dy_des,
+            y_act_rad: y_act,
+            swing_foot_height_m: foot_h,
+            pitch_rad: self.estimator.pitch_rad(),
+            pitch_rate_rad_s: self.estimator.pitch_rate_rad_s(),
+            gyro_bias_rad_s: self.estimator.gyro_bias_rad_s(),
+            trip: self.trip,
+            new_trip: status.new_trip,
+            leg_q_rad: leg_q,
+        };
+    }
+}

@@ -1,0 +1,186 @@
+//! The joint commands of each driven state: PD on the desired outputs with the plan's
+//! feed-forward (Walk, Stop), the held joints, the Stand pose, and the launch in double support.
+
+use super::walk::WalkEval;
+use super::Controller;
+use crate::control::double_support::{self, Geometry};
+use crate::control::gait_table::side_index;
+use crate::control::tick::{CommandMode, JointCommand};
+use crate::control::transitions::{
+    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP,
+    LAUNCH_REACH_FRACTION, LAUNCH_SPEED_MPS,
+};
+use crate::slots::{LEG_SLOTS, OUTPUTS, SLOTS};
+
+impl Controller {
+    /// Walk and Stop: PD on the desired outputs (relabeled to the stance leg's slots) with the
+    /// plan's feed-forward; the held joints at their positions.
+    pub(super) fn walk_commands(&self, eval: &WalkEval, commands: &mut [JointCommand; SLOTS]) {
+        let stance = side_index(self.stance);
+        for i in 0..OUTPUTS {
+            let slot = self.gait.out_slot[stance][i];
+            let dir = self.layout.direction[slot];
+            let ff = self.feedforward_nm[i] + self.plan_feedforward_scale * eval.feedforward_nm[i];
+            commands[slot] = self.pd(
+                slot,
+                self.to_motor(slot, eval.y[i]),
+                dir * eval.dy[i],
+                dir * ff,
+            );
+        }
+        self.hold_commands(commands);
+    }
+
+    pub(super) fn hold_commands(&self, commands: &mut [JointCommand; SLOTS]) {
+        for (slot, command) in commands.iter_mut().enumerate().skip(LEG_SLOTS) {
+            *command = self.pd(slot, self.layout.held_center_rad[slot], 0.0, 0.0);
+        }
+    }
+
+    /// Stand: after a Stop, the joint angles of the braking step's landing; otherwise the
+    /// gait's first pose.
+    pub(super) fn stand_commands(&self, commands: &mut [JointCommand; SLOTS]) {
+        match self.stand_hold {
+            Some(leg_q) => {
+                for (k, &q) in leg_q.iter().enumerate() {
+                    commands[k] = self.pd(k, self.to_motor(k, q), 0.0, 0.0);
+                }
+                self.hold_commands(commands);
+            }
+            None => {
+                let pose = self.stand_pose(self.stance);
+                for (slot, &q) in pose.iter().enumerate() {
+                    commands[slot] = self.pd(slot, q, 0.0, 0.0);
+                }
+            }
+        }
+    }
+
+    /// The kinematics of double support on this robot.
+    pub(super) fn geometry(&self) -> Geometry<'_> {
+        Geometry {
+            model: &self.model,
+            legs: &self.legs,
+            dof: self.dof,
+            q_template: &self.q_template,
+            leg_coord: &self.leg_coord,
+        }
+    }
+
+    /// Starts a launch from the measured double-support pose at rest: the torso moves forward
+    /// to [`LAUNCH_BEHIND_M`] behind the stance foot, no higher than keeps the rear leg within
+    /// [`LAUNCH_REACH_FRACTION`] of its reach, arriving at [`LAUNCH_SPEED_MPS`].
+    pub(super) fn begin_launch(
+        &mut self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+    ) {
+        let measured = self.geometry().measure(
+            self.stance,
+            self.estimator.pitch_rad(),
+            self.estimator.pitch_rate_rad_s(),
+            leg_q,
+            leg_dq,
+        );
+        self.launch = measured.map(|m| {
+            let x = -LAUNCH_BEHIND_M;
+            let reach = LAUNCH_REACH_FRACTION * self.leg_reach_m;
+            let dx = x - m.other_foot_xz_m[0];
+            let z = m.pose[1].min((reach * reach - dx * dx).max(0.0).sqrt());
+            Launch {
+                start_t_s: t_s,
+                from: m.pose,
+                to: [x, z, m.pose[2]],
+                other_foot_xz_m: m.other_foot_xz_m,
+                leg_q: *leg_q,
+                correction: [0.0; 3],
+                last_t_s: t_s,
+            }
+        });
+    }
+
+    /// The launch's joint targets at `t_s`: both feet held, the torso on its quintic (pitch
+    /// and height held), gravity fed forward.
+    pub(super) fn launch_commands(
+        &mut self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+        commands: &mut [JointCommand; SLOTS],
+    ) {
+        let Some(mut launch) = self.launch else {
+            return;
+        };
+        let dt = t_s - launch.start_t_s;
+        let mut pose = [0.0; 3];
+        let mut rate = [0.0; 3];
+        let end_rate = [LAUNCH_SPEED_MPS, 0.0, 0.0];
+        for k in 0..3 {
+            (pose[k], rate[k]) = double_support::quintic(
+                launch.from[k],
+                0.0,
+                launch.to[k],
+                end_rate[k],
+                LAUNCH_DURATION_S,
+                dt,
+            );
+        }
+        let geometry = self.geometry();
+        // Pose feedback (PI): the joints' compliance lets the torso sag off its plan (4° of
+        // pitch over the launch without it); the joint targets aim past the plan by the
+        // error. The proportional gain stays below 1: stable even if the joints followed their
+        // targets within a tick.
+        let h = (t_s - launch.last_t_s).clamp(0.0, 0.1);
+        launch.last_t_s = t_s;
+        let pitch = self.estimator.pitch_rad();
+        let pitch_rate = self.estimator.pitch_rate_rad_s();
+        let mut error = [0.0; 3];
+        if let Some(m) = geometry.measure(self.stance, pitch, pitch_rate, leg_q, leg_dq) {
+            for k in 0..3 {
+                error[k] = pose[k] - m.pose[k];
+                launch.correction[k] += LAUNCH_POSE_KI_PER_S * h * error[k];
+            }
+        }
+        let mut pose_cmd = pose;
+        for k in 0..3 {
+            pose_cmd[k] += launch.correction[k] + error[k] * LAUNCH_POSE_KP;
+        }
+        let solved = geometry.solve(
+            self.stance,
+            pose_cmd,
+            rate,
+            launch.other_foot_xz_m,
+            &launch.leg_q,
+        );
+        // Out of reach (not on a launch within LAUNCH_REACH_FRACTION): hold the last solution.
+        let (q_des, dq_des) = solved.unwrap_or((launch.leg_q, [0.0; LEG_SLOTS]));
+        let ff = geometry
+            .gravity_torques(self.stance, pose, &q_des)
+            .unwrap_or([0.0; LEG_SLOTS]);
+        launch.leg_q = q_des;
+        self.launch = Some(launch);
+        for k in 0..LEG_SLOTS {
+            let dir = self.layout.direction[k];
+            commands[k] = self.pd(k, self.to_motor(k, q_des[k]), dir * dq_des[k], dir * ff[k]);
+        }
+        self.hold_commands(commands);
+    }
+
+    /// PD command for a slot with the slot's gains (leg gains or held gains).
+    pub(super) fn pd(&self, slot: usize, q_des: f64, dq_des: f64, tau_ff: f64) -> JointCommand {
+        let (kp, kd) = if slot < LEG_SLOTS {
+            (self.kp[slot], self.kd[slot])
+        } else {
+            (self.layout.held_kp[slot], self.layout.held_kd[slot])
+        };
+        JointCommand {
+            mode: CommandMode::Pd,
+            q_des_rad: q_des,
+            dq_des_rad_s: dq_des,
+            kp_nm_per_rad: kp,
+            kd_nm_s_per_rad: kd,
+            tau_ff_nm: tau_ff,
+        }
+    }
+}

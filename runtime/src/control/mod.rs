@@ -1,0 +1,21 @@
+//! Control: the sans-IO tick of [`Controller`] — state machine, phase and stance switching,
+//! desired outputs y^d(τ), PD commands — and what it reads and writes ([`tick`]).
+//!
+//! | module | what |
+//! |---|---|
+//! | [`tick`] | [`TickInput`], [`TickOutput`], [`Status`], [`JointCommand`], [`OperatorCommand`], [`ControlState`] |
+//! | [`controller`] | the [`Controller`]: state machine and tick; its Walk evaluation and joint commands |
+//! | `gait_table` | the gait in fixed arrays: Bézier outputs, stance relabeling, feed-forward |
+//! | `transitions` | ramp, launch, start blend, braking step; minimum-jerk blends |
+//! | `double_support` | kinematics with both feet down: torso pose, inverse kinematics |
+
+pub mod controller;
+mod double_support;
+mod gait_table;
+pub mod tick;
+mod transitions;
+
+pub use controller::Controller;
+pub use tick::{
+    CommandMode, ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput,
+};

@@ -1,0 +1,244 @@
+//! What one control tick reads and writes: [`TickInput`], [`TickOutput`] (joint commands and
+//! [`Status`]), the operator's commands and the states of the state machine.
+
+use crate::safety::Trip;
+use crate::slots::{MotorSample, LEG_SLOTS, OUTPUTS, SLOTS};
+use drivers::imu::ImuSample;
+use model::Side;
+
+/// Operator requests, delivered through [`crate::operator`] without blocking the tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OperatorCommand {
+    /// Idle → Ramp (to the gait's first pose, then Stand).
+    Start,
+    /// Stand → Walk.
+    Walk,
+    /// Walk → Stop: finish the step, take the braking step, then Stand.
+    Stop,
+    /// Any → Damping, orderly (no trip).
+    Damp,
+    /// Damping → Idle, clearing a latched trip.
+    Reset,
+    /// Any → Damping with [`Trip::EStop`].
+    EStop,
+}
+
+impl OperatorCommand {
+    /// Every command, in declaration order.
+    pub const ALL: [OperatorCommand; 6] = [
+        OperatorCommand::Start,
+        OperatorCommand::Walk,
+        OperatorCommand::Stop,
+        OperatorCommand::Damp,
+        OperatorCommand::Reset,
+        OperatorCommand::EStop,
+    ];
+
+    /// Name for logs (`start`, `walk`, `stop`, `damp`, `reset`, `estop`).
+    pub fn name(self) -> &'static str {
+        match self {
+            OperatorCommand::Start => "start",
+            OperatorCommand::Walk => "walk",
+            OperatorCommand::Stop => "stop",
+            OperatorCommand::Damp => "damp",
+            OperatorCommand::Reset => "reset",
+            OperatorCommand::EStop => "estop",
+        }
+    }
+
+    /// The command of a [`OperatorCommand::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+}
+
+/// State of the controller's state machine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(u32)]
+pub enum ControlState {
+    /// Motors damped, waiting for `Start`.
+    Idle = 0,
+    /// Moving smoothly to the gait's first pose.
+    Ramp = 1,
+    /// Holding the first pose.
+    Stand = 2,
+    /// Walking the gait.
+    Walk = 3,
+    /// Walking until the current step ends, then one braking step, then Stand.
+    Stop = 4,
+    /// Every motor damped; latched until `Reset`.
+    Damping = 5,
+}
+
+impl ControlState {
+    /// Name for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControlState::Idle => "idle",
+            ControlState::Ramp => "ramp",
+            ControlState::Stand => "stand",
+            ControlState::Walk => "walk",
+            ControlState::Stop => "stop",
+            ControlState::Damping => "damping",
+        }
+    }
+
+    /// Whether the motors are position-controlled (and the safety monitor armed).
+    pub fn is_driven(self) -> bool {
+        matches!(
+            self,
+            ControlState::Ramp | ControlState::Stand | ControlState::Walk | ControlState::Stop
+        )
+    }
+}
+
+/// How a motor is commanded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandMode {
+    /// `τ = −kd·dq`.
+    Damping,
+    /// `τ = kp(q* − q) + kd(dq* − dq) + τ_ff`.
+    Pd,
+}
+
+/// One motor command (motor-side units).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointCommand {
+    /// Mode.
+    pub mode: CommandMode,
+    /// Desired position, rad.
+    pub q_des_rad: f64,
+    /// Desired velocity, rad/s.
+    pub dq_des_rad_s: f64,
+    /// Stiffness, N·m/rad.
+    pub kp_nm_per_rad: f64,
+    /// Damping, N·m·s/rad.
+    pub kd_nm_s_per_rad: f64,
+    /// Feed-forward torque, N·m.
+    pub tau_ff_nm: f64,
+}
+
+impl JointCommand {
+    /// Damping with gain `kd`.
+    pub const fn damping(kd_nm_s_per_rad: f64) -> Self {
+        Self {
+            mode: CommandMode::Damping,
+            q_des_rad: 0.0,
+            dq_des_rad_s: 0.0,
+            kp_nm_per_rad: 0.0,
+            kd_nm_s_per_rad,
+            tau_ff_nm: 0.0,
+        }
+    }
+
+    /// The torque this command asks for at the measured state, N·m (for telemetry).
+    pub fn torque_at(&self, q_rad: f64, dq_rad_s: f64) -> f64 {
+        match self.mode {
+            CommandMode::Damping => -self.kd_nm_s_per_rad * dq_rad_s,
+            CommandMode::Pd => {
+                self.kp_nm_per_rad * (self.q_des_rad - q_rad)
+                    + self.kd_nm_s_per_rad * (self.dq_des_rad_s - dq_rad_s)
+                    + self.tau_ff_nm
+            }
+        }
+    }
+}
+
+/// Everything the controller reads in one tick.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TickInput {
+    /// Controller time, s.
+    pub t_s: f64,
+    /// Motor samples by slot.
+    pub motors: [MotorSample; SLOTS],
+    /// IMU sample that arrived this tick.
+    pub imu: Option<ImuSample>,
+    /// Operator command that arrived this tick.
+    pub operator: Option<OperatorCommand>,
+    /// Consecutive deadline overruns of the loop.
+    pub overrun_streak: u32,
+}
+
+impl Default for TickInput {
+    fn default() -> Self {
+        Self {
+            t_s: 0.0,
+            motors: [MotorSample::default(); SLOTS],
+            imu: None,
+            operator: None,
+            overrun_streak: 0,
+        }
+    }
+}
+
+/// What the controller did this tick, for telemetry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Status {
+    /// State after this tick.
+    pub state: ControlState,
+    /// A transition that happened this tick (from, to).
+    pub transition: Option<(ControlState, ControlState)>,
+    /// Stance leg.
+    pub stance: Side,
+    /// Completed steps since Walk began.
+    pub steps: u32,
+    /// Phase τ (unclamped).
+    pub phase: f64,
+    /// τ̇, 1/s.
+    pub phase_rate_per_s: f64,
+    /// Desired outputs y^d (stance hip, stance knee, swing hip, swing knee), rad.
+    pub y_des_rad: [f64; OUTPUTS],
+    /// ẏ^d, rad/s.
+    pub dy_des_rad_s: [f64; OUTPUTS],
+    /// Actual outputs y^a, rad.
+    pub y_act_rad: [f64; OUTPUTS],
+    /// Swing foot height above the stance foot, m.
+    pub swing_foot_height_m: f64,
+    /// Estimated torso pitch, rad.
+    pub pitch_rad: f64,
+    /// Bias-corrected pitch rate, rad/s.
+    pub pitch_rate_rad_s: f64,
+    /// Gyro bias estimate, rad/s.
+    pub gyro_bias_rad_s: f64,
+    /// Latched safety trip.
+    pub trip: Option<Trip>,
+    /// The trip happened this tick.
+    pub new_trip: bool,
+    /// Model-side leg joint angles, rad.
+    pub leg_q_rad: [f64; LEG_SLOTS],
+}
+
+/// Everything the controller writes in one tick.
+#[derive(Clone, Copy, Debug)]
+pub struct TickOutput {
+    /// Commands by slot (ignored for slots that are not present).
+    pub commands: [JointCommand; SLOTS],
+    /// Status for telemetry.
+    pub status: Status,
+}
+
+impl Default for TickOutput {
+    fn default() -> Self {
+        Self {
+            commands: [JointCommand::damping(0.0); SLOTS],
+            status: Status {
+                state: ControlState::Idle,
+                transition: None,
+                stance: Side::Left,
+                steps: 0,
+                phase: 0.0,
+                phase_rate_per_s: 0.0,
+                y_des_rad: [0.0; OUTPUTS],
+                dy_des_rad_s: [0.0; OUTPUTS],
+                y_act_rad: [0.0; OUTPUTS],
+                swing_foot_height_m: 0.0,
+                pitch_rad: 0.0,
+                pitch_rate_rad_s: 0.0,
+                gyro_bias_rad_s: 0.0,
+                trip: None,
+                new_trip: false,
+                leg_q_rad: [0.0; LEG_SLOTS],
+            },
+        }
+    }
+}
