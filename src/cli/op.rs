@@ -19,13 +19,16 @@ pub(crate) fn send(args: &OpArgs) -> Result<()> {
     let OpArgs { command, config } = args;
     let cmd = runtime::operator::parse_key(command).ok_or_else(|| {
         anyhow::anyhow!(
-            "unknown operator command {command:?}: start, walk, stop, damp, reset or estop"
+            "unknown operator command `{command}`: start, walk, stop, damp, reset or estop"
         )
     })?;
     let cfg = runtime::config::RuntimeConfig::load(config)?;
     let service = runtime::operator::operator_service_name(&cfg.telemetry.service_name);
     let receivers = runtime::operator::send_over_iceoryx2(&service, cmd)?;
-    println!("sent {cmd:?} on {service} to {receivers} runtime(s)");
+    println!(
+        "sent `{}` on {service} to {receivers} runtime(s)",
+        cmd.name()
+    );
     if receivers == 0 {
         bail!("no runtime is listening on {service}");
     }

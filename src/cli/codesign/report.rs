@@ -7,6 +7,14 @@ use planner::codesign::{OuterIteration, SweepOutcome, SweepRun};
 use planner::config::InertiaCoupling;
 use std::fmt;
 
+/// The coupling in words: `exact` (inside the NLP) or `Alg. 1` (the paper's, between solves).
+fn coupling_name(inertia: InertiaCoupling) -> &'static str {
+    match inertia {
+        InertiaCoupling::Exact => "exact",
+        InertiaCoupling::Alg1 => "Alg. 1",
+    }
+}
+
 /// One design and the gait found there, or why none was: a row of the design tables.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct DesignRow<'a> {
@@ -90,8 +98,9 @@ impl fmt::Display for CodesignReport<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "co-design ({:?} inertia coupling), {:.1} s in all",
-            self.inertia, self.wall_time_s
+            "co-design ({} inertia coupling), {:.1} s in all",
+            coupling_name(self.inertia),
+            self.wall_time_s
         )?;
         writeln!(
             f,
@@ -212,14 +221,171 @@ impl fmt::Display for SweepTable<'_> {
         let grid = self.grid;
         write!(
             f,
-            "# Co-design convergence study\n\n{} runs from a {grid}×{grid} grid of initial thigh/shin lengths over [{}, {}] × [{}, {}] m, {:?} inertia coupling; warm start planned at {}/{} m in {:.1} s; {:.1} s wall time in all on {} threads.\n\n{} runs converged to the best design, {} ended in a worse local minimum (cost of transport more than {:.0} % above the best), {} failed.\n\n| quantity | mean | std | paper |\n|---|---|---|---|\n",
+            "# Co-design convergence study\n\n{} runs from a {grid}×{grid} grid of initial thigh/shin lengths over [{}, {}] × [{}, {}] m, {} inertia coupling; warm start planned at {}/{} m in {:.1} s; {:.1} s wall time in all on {} threads.\n\n{} runs converged to the best design, {} ended in a worse local minimum (cost of transport more than {:.0} % above the best), {} failed.\n\n| quantity | mean | std | paper |\n|---|---|---|---|\n",
             self.runs, self.thigh_m[0], self.thigh_m[1], self.shin_m[0],
-            self.shin_m[1], self.inertia, self.warm_start_m[0], self.warm_start_m[1], self.warm_start_s,
+            self.shin_m[1], coupling_name(self.inertia), self.warm_start_m[0], self.warm_start_m[1], self.warm_start_s,
             self.wall_s, self.threads, self.converged, self.local_minima, self.local_minimum_margin * 100.0, self.failed
         )?;
         for (name, (m, sd), paper) in self.rows {
             writeln!(f, "| {name} | {m:.4} | {sd:.4} | {paper} |")?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FIGURES: GaitFigures = GaitFigures {
+        step_length_m: 0.15,
+        step_duration_s: 0.8999,
+        speed_mps: 0.16669,
+        cost_of_transport: 0.013874,
+    };
+
+    #[test]
+    fn a_design_row_gives_lengths_and_gait_or_the_failure() {
+        let row = DesignRow {
+            name: "co-designed",
+            lengths_m: [0.34874, 0.35],
+            gait: Ok(FIGURES),
+        };
+        assert_eq!(
+            row.to_string(),
+            "co-designed              0.3487   0.3500    0.1500    0.8999    0.1667  0.01387"
+        );
+        let failed: Result<SweepOutcome, String> = Err("no feasible gait".into());
+        let row = DesignRow::of_outcome("box corner", [0.15, 0.35], &failed);
+        assert_eq!(
+            row.to_string(),
+            "box corner               0.1500   0.3500 failed: no feasible gait"
+        );
+    }
+
+    #[test]
+    fn the_codesign_report_names_the_coupling_in_words_and_warns_when_not_converged() {
+        let outer = [OuterIteration {
+            start_m: [0.24, 0.25],
+            lengths_m: [0.3487, 0.35],
+            cost_of_transport: 0.01411,
+            report: planner::plan::StageReport {
+                iterations: 135,
+                solve_time_s: 2.87,
+                ..Default::default()
+            },
+        }];
+        let row = |name| DesignRow {
+            name,
+            lengths_m: [0.24, 0.25],
+            gait: Ok(FIGURES),
+        };
+        let report = |inertia, converged| {
+            CodesignReport {
+                inertia,
+                wall_time_s: 4.06,
+                outer: &outer,
+                designs: [row("initial (fixed)"), row("co-designed")],
+                converged,
+            }
+            .to_string()
+        };
+        let text = report(InertiaCoupling::Exact, true);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], "co-design (exact inertia coupling), 4.1 s in all");
+        assert_eq!(
+            lines[2],
+            "    1  0.2400/0.2500    0.3487/0.3500    0.01411    135      2.87"
+        );
+        assert_eq!(lines[3], "");
+        assert!(lines[4].starts_with("design ") && lines[4].ends_with("CoT"));
+        assert!(lines[5].starts_with("initial (fixed) ") && lines[6].starts_with("co-designed "));
+        assert_eq!(lines.len(), 7);
+        assert!(text.ends_with('\n'));
+        let text = report(InertiaCoupling::Alg1, false);
+        assert!(
+            text.starts_with("co-design (Alg. 1 inertia coupling)"),
+            "{text}"
+        );
+        assert!(text.ends_with("before ‖ΔL‖ < δ\n"), "{text}");
+    }
+
+    #[test]
+    fn the_sweep_csv_has_a_line_per_run_and_quotes_a_failure() {
+        let runs = [
+            SweepRun {
+                initial_m: [0.15, 0.15],
+                outcome: Ok(SweepOutcome {
+                    lengths_m: [0.3487, 0.35],
+                    step_length_m: 0.15,
+                    step_duration_s: 0.9,
+                    speed_mps: 0.1667,
+                    cost_of_transport: 0.0139,
+                    iterations: 128,
+                    solve_time_s: 4.8,
+                }),
+                wall_time_s: 4.9,
+            },
+            SweepRun {
+                initial_m: [0.35, 0.35],
+                outcome: Err("the \"cost\" stage failed".into()),
+                wall_time_s: 1.5,
+            },
+        ];
+        let csv = SweepCsv {
+            runs: &runs,
+            local_minima: &[true, false],
+        }
+        .to_string();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert!(lines[0].starts_with("initial_thigh_m,initial_shin_m,status,"));
+        assert!(lines[0].ends_with(",wall_time_s,local_minimum"));
+        assert_eq!(
+            lines[1],
+            "0.15,0.15,ok,0.3487,0.35,0.15,0.9,0.1667,0.0139,128,4.8,4.9,true"
+        );
+        assert_eq!(
+            lines[2],
+            "0.35,0.35,\"failed: the 'cost' stage failed\",,,,,,,,,1.5,"
+        );
+        assert_eq!(lines.len(), 3);
+    }
+
+    #[test]
+    fn the_sweep_table_states_the_study_and_a_row_per_quantity() {
+        let rows = [
+            ("thigh length (m)", (0.34874, 0.0), "0.2425"),
+            ("solve time (s)", (4.6412, 0.1668), "—"),
+        ];
+        let md = SweepTable {
+            runs: 4,
+            grid: 2,
+            thigh_m: [0.15, 0.35],
+            shin_m: [0.15, 0.35],
+            inertia: InertiaCoupling::Exact,
+            warm_start_m: [0.24, 0.25],
+            warm_start_s: 1.23,
+            wall_s: 10.7,
+            threads: 2,
+            converged: 3,
+            local_minima: 1,
+            local_minimum_margin: 0.01,
+            failed: 0,
+            rows: &rows,
+        }
+        .to_string();
+        assert!(md.starts_with("# Co-design convergence study\n\n4 runs from a 2×2 grid"));
+        assert!(md.contains(
+            "over [0.15, 0.35] × [0.15, 0.35] m, exact inertia coupling; warm start planned at \
+             0.24/0.25 m in 1.2 s; 10.7 s wall time in all on 2 threads."
+        ));
+        assert!(md.contains(
+            "3 runs converged to the best design, 1 ended in a worse local minimum (cost of \
+             transport more than 1 % above the best), 0 failed."
+        ));
+        assert!(md.ends_with(
+            "| quantity | mean | std | paper |\n|---|---|---|---|\n| thigh length (m) | 0.3487 | \
+             0.0000 | 0.2425 |\n| solve time (s) | 4.6412 | 0.1668 | — |\n"
+        ));
     }
 }

@@ -219,3 +219,147 @@ impl fmt::Display for OrbitCheck {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use planner::nlp::PhaseTimes;
+    use std::time::Duration;
+
+    fn stage(name: &'static str, phases: Option<PhaseTimes>) -> StageReport {
+        StageReport {
+            stage: name,
+            status: "optimal".into(),
+            iterations: 39,
+            objective: 2.5e-5,
+            violation: 5.9e-7,
+            solve_time_s: 0.5,
+            evaluation_time_s: 0.25,
+            restoration_iterations: phases.map(|_| 0),
+            phases,
+            ..Default::default()
+        }
+    }
+
+    fn native(factorizations: usize) -> PhaseTimes {
+        PhaseTimes {
+            factorizations,
+            factorization_time: Duration::from_millis(200),
+            linear_solves: 40,
+            linear_solve_time: Duration::from_millis(30),
+            other_time: Duration::from_millis(20),
+        }
+    }
+
+    const GAIT: GaitFigures = GaitFigures {
+        step_length_m: 0.15,
+        step_duration_s: 0.9,
+        speed_mps: 0.16667,
+        cost_of_transport: 0.02074,
+    };
+
+    #[test]
+    fn plan_summary_has_a_row_per_stage_with_the_native_time_by_phase() {
+        let stages = [
+            stage("feasibility", Some(native(83))),
+            stage("cost of transport", Some(native(63))),
+        ];
+        let text = PlanSummary {
+            size: (1258, 1245),
+            feasibility_size: Some((930, 1081)),
+            setup_time_s: 0.004,
+            stages: &stages,
+            gait: GAIT,
+        }
+        .to_string();
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(
+            lines[0],
+            "NLP: 1258 variables, 1245 constraints (feasibility stage: 930 and 1081, no power \
+             slacks), set-up 0.004 s"
+        );
+        assert!(lines[1].starts_with("stage ") && lines[1].ends_with("   other"));
+        let row: Vec<&str> = lines[2].split_whitespace().collect();
+        assert_eq!(
+            row,
+            [
+                "feasibility",
+                "optimal",
+                "39",
+                "0",
+                "0.000025",
+                "5.9e-7",
+                "0.500",
+                "0.250",
+                "0.200",
+                "0.030",
+                "0.020"
+            ]
+        );
+        assert!(lines[3].starts_with("cost of transport   optimal"));
+        assert!(lines[4].contains("LDLᵀ factorizations, 83 + 63 in all;"));
+        assert!(!lines[4].contains("ripopt"));
+        assert_eq!(lines[5], "");
+        assert_eq!(
+            lines[6],
+            "step length 0.1500 m | duration 0.9000 s | speed 0.1667 m/s | cost of transport 0.0207"
+        );
+        assert_eq!(lines.len(), 7, "{text}");
+    }
+
+    #[test]
+    fn plan_summary_marks_what_ripopt_does_not_measure() {
+        let stages = [stage("feasibility", None), stage("cost of transport", None)];
+        let text = PlanSummary {
+            size: (1258, 1245),
+            feasibility_size: None,
+            setup_time_s: 0.004,
+            stages: &stages,
+            gait: GAIT,
+        }
+        .to_string();
+        assert!(text.starts_with("NLP: 1258 variables, 1245 constraints, set-up 0.004 s\n"));
+        let row = text.lines().nth(2).expect("a row");
+        assert!(
+            row.ends_with("    0.250        -        -        -"),
+            "{row}"
+        );
+        assert!(row.contains("     39      -     0.000025"), "{row}");
+        assert!(
+            text.contains("; -: not measured by the ripopt backend)"),
+            "{text}"
+        );
+        assert!(!text.contains("in all"), "{text}");
+    }
+
+    #[test]
+    fn orbit_check_says_stable_or_names_the_failures() {
+        let mut check = OrbitCheck {
+            spectral_radius: 0.86273,
+            fixed_point_residual: 2.8e-9,
+            step_length_m: 0.15,
+            step_duration_s: 0.8999,
+            failures: Vec::new(),
+        };
+        assert_eq!(
+            check.to_string(),
+            "verification (adam gait check): |λ|max 0.8627, fixed-point residual 2.8e-9, orbit \
+             steps 0.1500 m in 0.8999 s, stable periodic orbit"
+        );
+        check.failures = vec!["unstable".into(), "not the planned pace".into()];
+        assert!(check
+            .to_string()
+            .ends_with("NOT a stable orbit of the plan: unstable; not the planned pace"));
+    }
+
+    #[test]
+    fn phase_seconds_of_a_plan_add_the_stages_and_drop_an_unmeasured_split() {
+        let both =
+            PhaseSeconds::of_plan(&[stage("a", Some(native(1))), stage("b", Some(native(2)))]);
+        assert_eq!(both.evaluation, 0.5);
+        assert_eq!(both.split(), Some([0.4, 0.06, 0.04]));
+        let mixed = PhaseSeconds::of_plan(&[stage("a", Some(native(1))), stage("b", None)]);
+        assert_eq!(mixed.split(), None);
+        assert_eq!(mixed.columns(), "       -        -        -");
+    }
+}

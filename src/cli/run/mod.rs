@@ -1,8 +1,11 @@
 //! `adam run`, `adam demo` and `adam soak`: the gait walked by the real-time runtime on the
 //! simulated robot (with faults, under an operator) or on the robot over CAN.
 
+mod report;
+
 use crate::cli::paths::timestamped_log_path;
 use anyhow::{bail, Context, Result};
+use report::{FallText, LogCounts, RobotRunReport};
 use std::path::PathBuf;
 
 /// Arguments of `adam run`.
@@ -126,7 +129,7 @@ fn sim_walk_operated(
     let report = report?;
     println!("{report}");
     if let Some((t, what)) = report.fall {
-        bail!("the robot fell ({what:?}) at {t:.3} s");
+        bail!("the robot fell ({}) at {t:.3} s", FallText(what));
     }
     Ok(())
 }
@@ -141,10 +144,15 @@ fn sim_walk(setup: &runtime::Setup, options: &runtime::sim_run::SimWalkOptions) 
     let report = runtime::sim_run::walk(setup, options)?;
     println!("{report}");
     if let (Some(path), Some(log)) = (&options.log_path, &report.summary.log) {
-        println!("log: {} ({log:?})", path.display());
+        let counts = LogCounts {
+            records: log.records,
+            messages: log.messages,
+            dropped: log.dropped,
+        };
+        println!("log: {} ({counts})", path.display());
     }
     if let Some((t_s, what)) = report.fall {
-        bail!("the robot fell ({what:?}) at {t_s:.3} s");
+        bail!("the robot fell ({}) at {t_s:.3} s", FallText(what));
     }
     Ok(())
 }
@@ -208,7 +216,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             let interfaces =
                 can_interfaces.unwrap_or_else(|| runtime::robot::default_interfaces(&setup));
             let summary = runtime::robot::walk(&setup, &interfaces, duration)?;
-            println!("{summary:?}");
+            println!("{}", RobotRunReport::of(&summary));
             Ok(())
         }
     }
