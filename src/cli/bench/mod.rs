@@ -1,0 +1,166 @@
+//! `adam bench plan` and `adam bench check`: the plan and the gait check repeated, a row per
+//! run and the medians.
+
+mod report;
+
+use crate::cli::plan::PhaseSeconds;
+use anyhow::{bail, Context, Result};
+use model::PlanarModel;
+use report::{CheckRow, CheckSummary, PlanRow, PlanSummary};
+use std::path::PathBuf;
+
+/// The benchmarks of `adam bench`.
+#[derive(clap::Subcommand)]
+pub(crate) enum BenchWhat {
+    /// Plan the default ADAM gait `--runs` times (fresh problem each time): set-up, iterations
+    /// and solve time per stage, and the median.
+    Plan {
+        /// Number of plans.
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// Robot.
+        #[arg(long, default_value = "configs/robots/adam_planar.urdf")]
+        robot: PathBuf,
+        /// Planner config.
+        #[arg(long, default_value = "configs/planner/adam.toml")]
+        config: PathBuf,
+        /// NLP backend, overriding the config's `[solver] backend`: `ripopt` or `native`.
+        #[arg(long, value_parser = crate::cli::plan::parse_backend)]
+        backend: Option<planner::config::SolverBackend>,
+    },
+    /// Verify a gait `--runs` times like `adam gait check` (Newton on the Poincaré map,
+    /// eigenvalues): wall time per run, the median, and whether the reports are identical.
+    Check {
+        /// Number of checks.
+        #[arg(long, default_value_t = 3)]
+        runs: usize,
+        /// The gait file.
+        #[arg(default_value = "configs/gaits/adam_walk.json")]
+        gait: PathBuf,
+    },
+}
+
+/// `adam bench check`: verifies a gait `runs` times, one row per run, then the median.
+pub(crate) fn check(runs: usize, gait_path: &std::path::Path) -> Result<()> {
+    if runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let (gait, robot) = planner::verify::load_gait_and_robot(gait_path)?;
+    let options = planner::verify::VerifyOptions::default();
+    println!("{}", CheckRow::header());
+    let mut times = Vec::with_capacity(runs);
+    let mut first: Option<planner::verify::VerifyReport> = None;
+    let mut identical = true;
+    for run in 1..=runs {
+        let t0 = std::time::Instant::now();
+        let r = planner::verify::verify_gait(&robot, &gait, options)?;
+        let wall = t0.elapsed().as_secs_f64();
+        println!(
+            "{}",
+            CheckRow {
+                run,
+                wall_s: wall,
+                newton_iterations: r.newton_iterations,
+                fixed_point_residual: r.fixed_point_residual,
+                spectral_radius: r.spectral_radius,
+            }
+        );
+        times.push(wall);
+        match &first {
+            None => first = Some(r),
+            Some(f) => identical &= *f == r,
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    println!(
+        "\n{}",
+        CheckSummary {
+            gait: gait_path,
+            median_s: times[runs / 2],
+            runs,
+            identical,
+        }
+    );
+    Ok(())
+}
+
+/// `adam bench plan`: plans the gait `runs` times, one row per run, then the medians.
+pub(crate) fn plan(
+    runs: usize,
+    robot: &PathBuf,
+    config: &PathBuf,
+    backend: Option<planner::config::SolverBackend>,
+) -> Result<()> {
+    if runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let text =
+        std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
+    let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(backend) = backend {
+        cfg.solver.backend = backend;
+    }
+    println!("{}", PlanRow::header());
+    let mut phases = Vec::with_capacity(runs);
+    let mut totals = Vec::with_capacity(runs);
+    let mut iterations = Vec::with_capacity(runs);
+    let mut size = (0, 0);
+    let mut first_x: Option<Vec<f64>> = None;
+    let mut identical = true;
+    for run in 1..=runs {
+        let t0 = std::time::Instant::now();
+        let p = planner::plan::plan_gait(&model, "robot.urdf", &text, &cfg, &mut |_| {})?;
+        let total = t0.elapsed().as_secs_f64();
+        let (f, c) = (&p.stages[0], &p.stages[1]);
+        let phase = PhaseSeconds::of_plan(&p.stages);
+        println!(
+            "{}",
+            PlanRow {
+                run,
+                setup_s: p.setup_time_s,
+                feasibility_iterations: f.iterations,
+                feasibility_solve_s: f.solve_time_s,
+                cost_iterations: c.iterations,
+                cost_solve_s: c.solve_time_s,
+                phases: phase,
+                total_s: total,
+            }
+        );
+        phases.push(phase);
+        totals.push(total);
+        iterations.push(f.iterations + c.iterations);
+        size = p.size;
+        match &first_x {
+            None => first_x = Some(p.x.clone()),
+            Some(x) => identical &= *x == p.x,
+        }
+    }
+    totals.sort_by(f64::total_cmp);
+    iterations.sort_unstable();
+    // Each phase's median over the runs (so they need not add up to the median total).
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[runs / 2]
+    };
+    let mut evaluation: Vec<f64> = phases.iter().map(|p| p.evaluation).collect();
+    let backend: Option<Vec<[f64; 3]>> = phases.iter().map(PhaseSeconds::split).collect();
+    let split_s = backend.map(|b| {
+        let column = |k: usize| median(&mut b.iter().map(|p| p[k]).collect());
+        [column(0), column(1), column(2)]
+    });
+    println!(
+        "\n{}",
+        PlanSummary {
+            size,
+            backend: cfg.solver.backend,
+            median_total_s: totals[runs / 2],
+            median_iterations: iterations[runs / 2],
+            runs,
+            identical,
+            evaluation_s: median(&mut evaluation),
+            split_s,
+        }
+    );
+    Ok(())
+}

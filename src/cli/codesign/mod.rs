@@ -1,0 +1,246 @@
+//! `adam codesign [sweep]`: the thigh and shin lengths co-designed with the gait (paper Sec.
+//! III), compared with gaits at fixed designs; the sweep is the paper's convergence study.
+
+mod report;
+
+use crate::cli::paths::relative_path;
+use crate::cli::plan::{gait_check, progress_printer};
+use crate::cli::plots;
+use anyhow::{bail, Context, Result};
+use model::design::DesignLengths;
+use report::{CodesignReport, DesignRow, SweepCsv, SweepTable};
+use std::path::PathBuf;
+
+/// Arguments of `adam codesign`.
+#[derive(clap::Args)]
+pub(crate) struct CodesignArgs {
+    /// Planner config (TOML) with its `[codesign]` section.
+    #[arg(long, default_value = "configs/planner/adam.toml")]
+    config: PathBuf,
+    /// Inertia coupling, overriding the config: `exact` (inside the NLP) or `alg1`
+    /// (the paper's Alg. 1: frozen per solve, regenerated between solves).
+    #[arg(long, value_enum)]
+    inertia: Option<InertiaArg>,
+    /// Output gait file.
+    #[arg(long, default_value = "configs/gaits/adam_codesign.json")]
+    out_gait: PathBuf,
+    /// Output URDF of the co-designed robot.
+    #[arg(long, default_value = "configs/robots/adam_codesign.urdf")]
+    out_urdf: PathBuf,
+    /// `sweep`: the convergence study instead of one co-design.
+    #[command(subcommand)]
+    pub(crate) study: Option<CodesignStudy>,
+}
+
+/// The studies of `adam codesign`.
+#[derive(clap::Subcommand)]
+pub(crate) enum CodesignStudy {
+    /// The paper's convergence study: co-design from an n × n grid of initial thigh and shin
+    /// lengths over the config's bounds, in parallel on all cores; writes sweep.csv, table.md
+    /// (like the paper's Table II) and convergence.png/.svg (like its Fig. 3).
+    Sweep {
+        /// Grid size n (n × n runs).
+        #[arg(long, default_value_t = 5)]
+        grid: usize,
+        /// Output folder.
+        #[arg(long, default_value = "logs/codesign-sweep")]
+        out_dir: PathBuf,
+    },
+}
+
+/// `--inertia` (no doc on the values: clap would list them with it).
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum InertiaArg {
+    Exact,
+    Alg1,
+}
+
+/// The planner config with the CLI's inertia coupling, if given.
+fn codesign_config(
+    config: &PathBuf,
+    inertia: Option<InertiaArg>,
+) -> Result<planner::config::PlannerConfig> {
+    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    if let Some(i) = inertia {
+        cfg.codesign.inertia = match i {
+            InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
+            InertiaArg::Alg1 => planner::config::InertiaCoupling::Alg1,
+        };
+    }
+    Ok(cfg)
+}
+
+/// `adam codesign`: co-designs, writes the URDF and gait, prints the outer iterations and the
+/// comparison with fixed designs, and checks the gait.
+pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
+    let CodesignArgs {
+        config,
+        inertia,
+        out_gait,
+        out_urdf,
+        ..
+    } = args;
+    let inertia = *inertia;
+    let cfg = codesign_config(config, inertia)?;
+    for path in [out_gait, out_urdf] {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+    }
+    let urdf_ref = relative_path(out_urdf, out_gait);
+    let r = planner::codesign::codesign(&cfg, &urdf_ref, &mut progress_printer())?;
+    std::fs::write(out_urdf, &r.urdf).with_context(|| format!("writing {}", out_urdf.display()))?;
+    r.planned.gait.save(out_gait)?;
+    let (g0, g) = (&r.initial.gait, &r.planned.gait);
+    print!(
+        "\n{}",
+        CodesignReport {
+            inertia: cfg.codesign.inertia,
+            wall_time_s: r.wall_time_s,
+            outer: &r.outer,
+            designs: [
+                DesignRow::of_gait("initial (fixed)", g0),
+                DesignRow::of_gait("co-designed", g),
+            ],
+            converged: r.converged,
+        }
+    );
+    // Gaits optimized at fixed designs, for comparison: the four corners of the design box and
+    // the paper's optimum, each warm-started from the initial design's gait.
+    let c = &cfg.codesign;
+    let fixed = [
+        ("box corner", [c.thigh_m[0], c.shin_m[0]]),
+        ("box corner", [c.thigh_m[0], c.shin_m[1]]),
+        ("box corner", [c.thigh_m[1], c.shin_m[0]]),
+        ("box corner", [c.thigh_m[1], c.shin_m[1]]),
+        ("paper's optimum", [0.2425, 0.2515]),
+    ];
+    let designs: Vec<[f64; 2]> = fixed.iter().map(|f| f.1).collect();
+    println!("\noptimizing the gait at fixed designs for comparison ...");
+    let outcomes = planner::codesign::compare_fixed_designs(&cfg, &r.initial, &designs);
+    for ((name, d), o) in fixed.iter().zip(&outcomes) {
+        println!("{}", DesignRow::of_outcome(name, *d, o));
+    }
+    println!("wrote {} and {}", out_gait.display(), out_urdf.display());
+    gait_check(out_gait, 10.0)
+}
+
+/// Relative cost of transport above the best run that marks a worse local minimum.
+const LOCAL_MINIMUM_MARGIN: f64 = 0.01;
+
+/// `adam codesign sweep`: the convergence study; writes sweep.csv, table.md and the convergence
+/// figure, prints the table.
+pub(crate) fn convergence_sweep(args: &CodesignArgs, grid: usize, out_dir: &PathBuf) -> Result<()> {
+    use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
+    let (config, inertia) = (&args.config, args.inertia);
+    if !(1..=20).contains(&grid) {
+        bail!("--grid {grid}: must be in 1..=20");
+    }
+    let cfg = codesign_config(config, inertia)?;
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let start = std::time::Instant::now();
+    let model_lengths = cfg.codesign.initial_m;
+    let (model, urdf) = model::design::generate_model(&DesignLengths {
+        thigh_length_m: model_lengths[0],
+        shin_length_m: model_lengths[1],
+    })?;
+    println!(
+        "warm start: planning the gait at thigh {} m, shin {} m",
+        model_lengths[0], model_lengths[1]
+    );
+    let initial = planner::plan::plan_gait(&model, "robot.urdf", &urdf, &cfg, &mut |_| {})?;
+    let warm_s = start.elapsed().as_secs_f64();
+    let starts = sweep_grid(&cfg, grid);
+    let bar = indicatif::ProgressBar::new(starts.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} runs, {elapsed} elapsed, ETA {eta} {msg}",
+        )
+        .map_err(|e| anyhow::anyhow!("{e}"))?,
+    );
+    let runs = sweep(&cfg, &initial, model_lengths, &starts, &|r| {
+        bar.inc(1);
+        if let Ok(o) = &r.outcome {
+            bar.set_message(format!(
+                "last: {:.3}/{:.3} → {:.4}/{:.4}",
+                r.initial_m[0], r.initial_m[1], o.lengths_m[0], o.lengths_m[1]
+            ));
+        }
+    });
+    bar.finish();
+    let wall_s = start.elapsed().as_secs_f64();
+    let minima = local_minima(&runs, LOCAL_MINIMUM_MARGIN);
+    // CSV of every run.
+    let csv = SweepCsv {
+        runs: &runs,
+        local_minima: &minima,
+    }
+    .to_string();
+    std::fs::write(out_dir.join("sweep.csv"), csv)?;
+    // Table II: mean ± std over the runs that are not local minima.
+    let good: Vec<&planner::codesign::SweepOutcome> = runs
+        .iter()
+        .zip(&minima)
+        .filter(|(_, &lm)| !lm)
+        .filter_map(|(r, _)| r.outcome.as_ref().ok())
+        .collect();
+    let col = |f: fn(&planner::codesign::SweepOutcome) -> f64| {
+        mean_std(&good.iter().map(|o| f(o)).collect::<Vec<_>>())
+    };
+    let rows = [
+        ("thigh length (m)", col(|o| o.lengths_m[0]), "0.2425"),
+        ("shin length (m)", col(|o| o.lengths_m[1]), "0.2515"),
+        ("step length (m)", col(|o| o.step_length_m), "—"),
+        ("step duration (s)", col(|o| o.step_duration_s), "—"),
+        ("speed (m/s)", col(|o| o.speed_mps), "—"),
+        ("cost of transport", col(|o| o.cost_of_transport), "—"),
+        ("solve time (s)", col(|o| o.solve_time_s), "—"),
+    ];
+    let failed = runs.iter().filter(|r| r.outcome.is_err()).count();
+    let n_minima = minima.iter().filter(|&&m| m).count();
+    let md = SweepTable {
+        runs: runs.len(),
+        grid,
+        thigh_m: cfg.codesign.thigh_m,
+        shin_m: cfg.codesign.shin_m,
+        inertia: cfg.codesign.inertia,
+        warm_start_m: model_lengths,
+        warm_start_s: warm_s,
+        wall_s,
+        threads: rayon_threads(),
+        converged: good.len(),
+        local_minima: n_minima,
+        local_minimum_margin: LOCAL_MINIMUM_MARGIN,
+        failed,
+        rows: &rows,
+    }
+    .to_string();
+    std::fs::write(out_dir.join("table.md"), &md)?;
+    print!("\n{md}");
+    let arrows: Vec<plots::ConvergenceArrow> = runs
+        .iter()
+        .zip(&minima)
+        .filter_map(|(r, &lm)| {
+            r.outcome.as_ref().ok().map(|o| plots::ConvergenceArrow {
+                from_m: (r.initial_m[0], r.initial_m[1]),
+                to_m: (o.lengths_m[0], o.lengths_m[1]),
+                local_minimum: lm,
+            })
+        })
+        .collect();
+    plots::convergence(
+        &out_dir.join("convergence"),
+        &arrows,
+        [cfg.codesign.thigh_m, cfg.codesign.shin_m],
+        (0.2425, 0.2515),
+    )?;
+    println!(
+        "\nwrote {0}/sweep.csv, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
+        out_dir.display()
+    );
+    Ok(())
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}

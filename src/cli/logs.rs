@@ -1,0 +1,163 @@
+//! `adam logs`, `adam replay` and `adam plot`: what a run log holds, a cut-off log recovered,
+//! a log replayed through this build's controller, and figures drawn from logs.
+
+use crate::cli::paths::with_suffix;
+use crate::cli::plots;
+use anyhow::{bail, Result};
+use std::path::PathBuf;
+
+/// Arguments of `adam replay`.
+#[derive(clap::Args)]
+pub(crate) struct ReplayArgs {
+    /// The log(s) to replay.
+    #[arg(required_unless_present = "mint")]
+    logs: Vec<PathBuf>,
+    /// Record the replay fixtures into this folder (after an intended controller change).
+    #[arg(long, conflicts_with = "logs")]
+    mint: Option<PathBuf>,
+}
+
+/// The subcommands of `adam logs`.
+#[derive(clap::Subcommand)]
+pub(crate) enum LogsCommand {
+    /// Channels, message counts, duration, drops, safety trips, gait and design of a log.
+    Info {
+        /// The log.
+        log: PathBuf,
+    },
+    /// Rewrite a log cut off by a crash with summary and indexes: every message up to the last
+    /// complete chunk.
+    Recover {
+        /// The cut-off log.
+        log: PathBuf,
+        /// Output (default: `<log stem>.recovered.mcap` beside the input).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// The figures of `adam plot`.
+#[derive(clap::Subcommand)]
+pub(crate) enum PlotWhat {
+    /// Phase portraits (q vs q̇) of the hips and knees, like the paper's Fig. 4, as PNG and SVG.
+    Portrait {
+        /// The run.
+        log: PathBuf,
+        /// A second run to overlay (e.g. another gait, seed or the hardware).
+        #[arg(long)]
+        compare: Option<PathBuf>,
+        /// Output prefix (default: the log's path without extension, + `-portrait`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Gait tiles, like the paper's Fig. 5: stick figures at evenly spaced phases of one step
+    /// of a logged walk, as PNG and SVG.
+    Tiles {
+        /// The run (a walk of at least two steps).
+        log: PathBuf,
+        /// Number of figures (phases 0, 1/(n−1), …, 1).
+        #[arg(long, default_value_t = 8)]
+        count: usize,
+        /// Output prefix (default: the log's path without extension, + `-tiles`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+}
+
+/// `adam replay`: each log replayed through this build's controller, or the fixtures minted.
+pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
+    let (logs, mint) = (&args.logs, args.mint.as_deref());
+    if let Some(dir) = mint {
+        let setup = runtime::Setup::load("configs/runtime/adam.toml", runtime::DEFAULT_GAIT)?;
+        let paths = runtime::replay::mint_fixtures(&setup, dir)?;
+        for (path, (_, what)) in paths.iter().zip(runtime::replay::FIXTURES) {
+            let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+            println!("wrote {} ({bytes} bytes): {what}", path.display());
+        }
+        return Ok(());
+    }
+    let mut diverged = 0;
+    for log in logs {
+        let report = runtime::replay::replay(log)?;
+        print!("{report}");
+        diverged += usize::from(report.divergence.is_some());
+    }
+    if diverged > 0 {
+        bail!("{diverged} of {} log(s) diverged", logs.len());
+    }
+    Ok(())
+}
+
+/// `adam logs info`: channels, counts, drops, trips, gait and design of a log.
+pub(crate) fn info(log: &std::path::Path) -> Result<()> {
+    print!("{}", runtime::log_read::read_info(log)?);
+    Ok(())
+}
+
+/// `adam logs recover`: rewrites a cut-off log with summary and indexes.
+pub(crate) fn recover(log: PathBuf, out: Option<PathBuf>) -> Result<()> {
+    let out = out.unwrap_or_else(|| log.with_extension("recovered.mcap"));
+    let stats = runtime::log_read::recover(&log, &out)?;
+    println!(
+        "{} -> {}: {} messages, {} attachments, {} metadata records{}",
+        log.display(),
+        out.display(),
+        stats.messages,
+        stats.attachments,
+        stats.metadata,
+        if stats.input_complete {
+            " (the input was complete already)"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+/// `adam plot portrait`: phase portraits of one run, or two overlaid.
+pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathBuf>) -> Result<()> {
+    let a = runtime::log_read::joint_series(&log)?;
+    let b = compare
+        .as_ref()
+        .map(|p| runtime::log_read::joint_series(p))
+        .transpose()?;
+    let mut runs = vec![plots::PortraitRun {
+        label: log.display().to_string(),
+        series: &a,
+    }];
+    if let (Some(p), Some(b)) = (&compare, &b) {
+        runs.push(plots::PortraitRun {
+            label: p.display().to_string(),
+            series: b,
+        });
+    }
+    let prefix = out.unwrap_or_else(|| with_suffix(&log, "-portrait"));
+    plots::portraits(&prefix, &runs)?;
+    println!(
+        "wrote {} and {}",
+        prefix.with_extension("png").display(),
+        prefix.with_extension("svg").display()
+    );
+    Ok(())
+}
+
+/// `adam plot tiles`: stick figures of one step of a logged walk.
+pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>) -> Result<()> {
+    let tiles = runtime::tiles::gait_tiles(&log, count)?;
+    let prefix = out.unwrap_or_else(|| with_suffix(&log, "-tiles"));
+    let name = log
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    plots::tiles(&prefix, &tiles, &name)?;
+    println!(
+        "step {} ({:.3} m in {:.3} s), {} figures: wrote {} and {}",
+        tiles.step,
+        tiles.step_length_m,
+        tiles.step_duration_s,
+        tiles.figures.len(),
+        prefix.with_extension("png").display(),
+        prefix.with_extension("svg").display()
+    );
+    Ok(())
+}

@@ -1,0 +1,36 @@
+//! `adam op`: one operator command (start, walk, stop, damp, reset, estop) sent over iceoryx2 to
+//! a running `adam run --real-time`.
+
+use anyhow::{bail, Result};
+use std::path::PathBuf;
+
+/// Arguments of `adam op`.
+#[derive(clap::Args)]
+pub(crate) struct OpArgs {
+    /// start, walk, stop, damp, reset or estop.
+    command: String,
+    /// Runtime config (its telemetry service name locates the runtime).
+    #[arg(long, default_value = "configs/runtime/adam.toml")]
+    config: PathBuf,
+}
+
+/// `adam op`: sends the command to every runtime listening on the config's service.
+pub(crate) fn send(args: &OpArgs) -> Result<()> {
+    let OpArgs { command, config } = args;
+    let cmd = runtime::operator::parse_key(command).ok_or_else(|| {
+        anyhow::anyhow!(
+            "unknown operator command `{command}`: start, walk, stop, damp, reset or estop"
+        )
+    })?;
+    let cfg = runtime::config::RuntimeConfig::load(config)?;
+    let service = runtime::operator::operator_service_name(&cfg.telemetry.service_name);
+    let receivers = runtime::operator::send_over_iceoryx2(&service, cmd)?;
+    println!(
+        "sent `{}` on {service} to {receivers} runtime(s)",
+        cmd.name()
+    );
+    if receivers == 0 {
+        bail!("no runtime is listening on {service}");
+    }
+    Ok(())
+}

@@ -1,0 +1,261 @@
+//! `adam run`, `adam demo` and `adam soak`: the gait walked by the real-time runtime on the
+//! simulated robot (with faults, under an operator) or on the robot over CAN.
+
+mod report;
+
+use crate::cli::paths::timestamped_log_path;
+use anyhow::{bail, Context, Result};
+use report::{FallText, LogCounts, RobotRunReport};
+use std::path::PathBuf;
+
+/// Arguments of `adam run`.
+#[derive(clap::Args)]
+pub(crate) struct RunArgs {
+    /// Where to walk.
+    #[arg(long, value_enum)]
+    backend: Backend,
+    /// Gait file (JSON); default: the co-designed ADAM's.
+    #[arg(long, default_value = runtime::DEFAULT_GAIT)]
+    gait: PathBuf,
+    /// Runtime config (TOML).
+    #[arg(long, default_value = "configs/runtime/adam.toml")]
+    config: PathBuf,
+    /// Run time, e.g. `30s`, `1500ms` or `30` (seconds).
+    #[arg(long, default_value = "30s", value_parser = parse_duration_s)]
+    duration: f64,
+    /// Treadmill belt speed, m/s (sim; default: the gait's speed).
+    #[arg(long)]
+    belt: Option<f64>,
+    /// MCAP log file (sim; default: no log).
+    #[arg(long)]
+    log: Option<PathBuf>,
+    /// Seed of the simulated IMU and encoder noise (sim).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Pace the simulated run by the wall clock at the loop rate and report the loop's
+    /// wake-up jitter (sim; default: as fast as the CPU allows). A wall-clock run listens
+    /// for operator commands over iceoryx2 (`adam op`).
+    #[arg(long)]
+    real_time: bool,
+    /// Read operator commands from the keyboard, one per line (s start, w walk, p stop,
+    /// d damp, r reset, e e-stop); with --real-time.
+    #[arg(long, requires = "real_time")]
+    keyboard: bool,
+    /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
+    #[arg(long, value_delimiter = ',')]
+    can_interfaces: Option<Vec<String>>,
+    /// Inject faults (sim): a profile name (none, loss-0.1, loss-1, loss-10, corrupt-1,
+    /// delay-1, soak, rough) or a TOML file; seeded by --seed.
+    #[arg(long)]
+    faults: Option<String>,
+}
+
+/// Arguments of `adam soak`.
+#[derive(clap::Args)]
+pub(crate) struct SoakArgs {
+    /// Simulated minutes to walk (fractions allowed).
+    #[arg(long)]
+    minutes: f64,
+    /// Fault profile: none, loss-0.1, loss-1, loss-10, corrupt-1, delay-1, soak, rough,
+    /// or a TOML file.
+    #[arg(long, default_value = "soak")]
+    faults: String,
+    /// Seed of the faults and the sensor noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Keep each episode's MCAP log in this folder (default: a temporary log, removed).
+    #[arg(long)]
+    log_dir: Option<PathBuf>,
+    /// Gait file (JSON); default: the co-designed ADAM's.
+    #[arg(long, default_value = runtime::DEFAULT_GAIT)]
+    gait: PathBuf,
+    /// Runtime config (TOML).
+    #[arg(long, default_value = "configs/runtime/adam.toml")]
+    config: PathBuf,
+}
+
+/// Backend of `adam run`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Backend {
+    /// The simulated ADAM on a treadmill behind the simulated A1 firmware and CAN codec.
+    Sim,
+    /// The robot over SocketCAN.
+    Can,
+}
+
+/// Parses `30s`, `1500ms` or `30` into seconds.
+fn parse_duration_s(text: &str) -> Result<f64, String> {
+    let t = text.trim();
+    let (number, scale) = if let Some(ms) = t.strip_suffix("ms") {
+        (ms, 1e-3)
+    } else if let Some(s) = t.strip_suffix('s') {
+        (s, 1.0)
+    } else {
+        (t, 1.0)
+    };
+    let v: f64 = number
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a duration (expected e.g. 30s, 1500ms)"))?;
+    let seconds = v * scale;
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(format!("'{text}': the duration must be positive"));
+    }
+    Ok(seconds)
+}
+
+/// A wall-clock simulated run that takes operator commands over iceoryx2 and, if asked, from
+/// the keyboard.
+fn sim_walk_operated(
+    setup: &runtime::Setup,
+    options: &runtime::sim_run::SimWalkOptions,
+    keyboard: bool,
+) -> Result<()> {
+    use runtime::operator::{self, SharedHandle};
+    let (handle, receiver) = operator::channel(64);
+    let shared = SharedHandle::new(handle);
+    let service = operator::operator_service_name(&setup.config.telemetry.service_name);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let forwarder = operator::spawn_iceoryx2_forwarder(&service, shared.clone(), stop.clone())?;
+    println!("operator commands: `adam op <command>` (iceoryx2 service {service})");
+    if keyboard {
+        println!("{}", operator::KEY_HELP);
+        // The thread ends with stdin; it is not joined (a blocked read must not hold the exit).
+        operator::spawn_keyboard(std::io::BufReader::new(std::io::stdin()), shared);
+    }
+    let report = runtime::sim_run::walk_with_operator(setup, options, Some(receiver));
+    stop.store(true, std::sync::atomic::Ordering::Release);
+    let _ = forwarder.join();
+    let report = report?;
+    println!("{report}");
+    if let Some((t, what)) = report.fall {
+        bail!("the robot fell ({}) at {t:.3} s", FallText(what));
+    }
+    Ok(())
+}
+
+/// Walk in simulation and print the report.
+fn sim_walk(setup: &runtime::Setup, options: &runtime::sim_run::SimWalkOptions) -> Result<()> {
+    if let Some(dir) = options.log_path.as_ref().and_then(|p| p.parent()) {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+    }
+    let report = runtime::sim_run::walk(setup, options)?;
+    println!("{report}");
+    if let (Some(path), Some(log)) = (&options.log_path, &report.summary.log) {
+        let counts = LogCounts {
+            records: log.records,
+            messages: log.messages,
+            dropped: log.dropped,
+        };
+        println!("log: {} ({counts})", path.display());
+    }
+    if let Some((t_s, what)) = report.fall {
+        bail!("the robot fell ({}) at {t_s:.3} s", FallText(what));
+    }
+    Ok(())
+}
+
+/// `adam demo`: the shipped gait, 30 s on the simulated treadmill, logged under `logs/`.
+pub(crate) fn demo() -> Result<()> {
+    let gait = PathBuf::from(runtime::DEFAULT_GAIT);
+    let config = PathBuf::from("configs/runtime/adam.toml");
+    let setup = runtime::Setup::load(&config, &gait)?;
+    let g = &setup.gait;
+    println!(
+        "adam demo: {} (step {:.4} m, {:.4} s, {:.4} m/s) with {}, 30 s on the simulated treadmill via SimBus (A1 CAN codec)",
+        gait.display(),
+        g.step_length_m,
+        g.step_duration_s,
+        g.speed_mps,
+        config.display()
+    );
+    let mut options = runtime::sim_run::SimWalkOptions::new(30.0);
+    options.log_path = Some(timestamped_log_path());
+    sim_walk(&setup, &options)
+}
+
+/// `adam run`: walks on the chosen backend and prints its report.
+pub(crate) fn run(args: RunArgs) -> Result<()> {
+    let RunArgs {
+        backend,
+        gait,
+        config,
+        duration,
+        belt,
+        log,
+        seed,
+        real_time,
+        keyboard,
+        can_interfaces,
+        faults,
+    } = args;
+    let setup = runtime::Setup::load(&config, &gait)?;
+    if faults.is_some() && matches!(backend, Backend::Can) {
+        bail!("--faults injects faults into the simulated backend only");
+    }
+    match backend {
+        Backend::Sim => {
+            let mut options = runtime::sim_run::SimWalkOptions::new(duration);
+            options.belt_speed_mps = belt;
+            options.log_path = log;
+            options.seed = seed;
+            options.real_time = real_time;
+            options.faults = faults
+                .as_deref()
+                .map(runtime::faults::FaultProfile::resolve)
+                .transpose()?;
+            if real_time {
+                sim_walk_operated(&setup, &options, keyboard)
+            } else {
+                sim_walk(&setup, &options)
+            }
+        }
+        Backend::Can => {
+            let interfaces =
+                can_interfaces.unwrap_or_else(|| runtime::robot::default_interfaces(&setup));
+            let summary = runtime::robot::walk(&setup, &interfaces, duration)?;
+            println!("{}", RobotRunReport::of(&summary));
+            Ok(())
+        }
+    }
+}
+
+/// `adam soak`: walks under random faults, resets after each trip, prints the soak table.
+pub(crate) fn soak(args: SoakArgs) -> Result<()> {
+    let SoakArgs {
+        minutes,
+        faults,
+        seed,
+        log_dir,
+        gait,
+        config,
+    } = args;
+    let (faults, config, gait) = (faults.as_str(), config.as_path(), gait.as_path());
+    let profile = runtime::faults::FaultProfile::resolve(faults)?;
+    let setup = runtime::Setup::load(config, gait)?;
+    let options = runtime::sim_run::SoakOptions {
+        duration_s: minutes * 60.0,
+        profile,
+        seed,
+        log_dir,
+    };
+    println!("adam soak: {minutes} min of simulated walking, faults `{faults}`, seed {seed}");
+    let wall = std::time::Instant::now();
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let report = runtime::sim_run::soak(&setup, &options, |r| {
+        if tty {
+            eprint!("\r{:.1} s simulated, {} episodes", r.sim_time_s, r.episodes);
+        }
+    })?;
+    if tty {
+        eprintln!();
+    }
+    print!("{report}");
+    println!(
+        "wall time                    {:.1} s",
+        wall.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
