@@ -361,7 +361,7 @@ fn soak_walks_under_faults_and_prints_its_table() {
     assert!(!logs.is_empty());
     for entry in logs {
         let path = entry.expect("entry").path();
-        let info = runtime::log_read::read_info(&path).expect("log reads");
+        let info = runtime::telemetry::log_read::read_info(&path).expect("log reads");
         assert_eq!(info.truncated, None, "{}", path.display());
     }
 }

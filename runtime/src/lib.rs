@@ -78,10 +78,6 @@ pub use drivers::imu::{Imu, ImuSample};
 pub use error::{Result, RuntimeError};
 pub use rt_loop::{run, LoopOptions, RunSummary};
 
-// Compatibility paths for the CLI until it moves to the new rooms (issue #26).
-pub use sim::{faults, run as sim_run};
-pub use telemetry::{log_read, replay};
-
 /// The runtime's default gait (repository-relative): the co-designed ADAM's (`adam codesign`).
 pub const DEFAULT_GAIT: &str = "configs/gaits/adam_codesign.json";
 

@@ -69,8 +69,8 @@ pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
     let (logs, mint) = (&args.logs, args.mint.as_deref());
     if let Some(dir) = mint {
         let setup = runtime::Setup::load("configs/runtime/adam.toml", runtime::DEFAULT_GAIT)?;
-        let paths = runtime::replay::mint_fixtures(&setup, dir)?;
-        for (path, (_, what)) in paths.iter().zip(runtime::replay::FIXTURES) {
+        let paths = runtime::telemetry::replay::mint_fixtures(&setup, dir)?;
+        for (path, (_, what)) in paths.iter().zip(runtime::telemetry::replay::FIXTURES) {
             let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
             println!("wrote {} ({bytes} bytes): {what}", path.display());
         }
@@ -78,7 +78,7 @@ pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
     }
     let mut diverged = 0;
     for log in logs {
-        let report = runtime::replay::replay(log)?;
+        let report = runtime::telemetry::replay::replay(log)?;
         print!("{report}");
         diverged += usize::from(report.divergence.is_some());
     }
@@ -90,14 +90,14 @@ pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
 
 /// `adam logs info`: channels, counts, drops, trips, gait and design of a log.
 pub(crate) fn info(log: &std::path::Path) -> Result<()> {
-    print!("{}", runtime::log_read::read_info(log)?);
+    print!("{}", runtime::telemetry::log_read::read_info(log)?);
     Ok(())
 }
 
 /// `adam logs recover`: rewrites a cut-off log with summary and indexes.
 pub(crate) fn recover(log: PathBuf, out: Option<PathBuf>) -> Result<()> {
     let out = out.unwrap_or_else(|| log.with_extension("recovered.mcap"));
-    let stats = runtime::log_read::recover(&log, &out)?;
+    let stats = runtime::telemetry::log_read::recover(&log, &out)?;
     println!(
         "{} -> {}: {} messages, {} attachments, {} metadata records{}",
         log.display(),
@@ -116,10 +116,10 @@ pub(crate) fn recover(log: PathBuf, out: Option<PathBuf>) -> Result<()> {
 
 /// `adam plot portrait`: phase portraits of one run, or two overlaid.
 pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathBuf>) -> Result<()> {
-    let a = runtime::log_read::joint_series(&log)?;
+    let a = runtime::telemetry::log_read::joint_series(&log)?;
     let b = compare
         .as_ref()
-        .map(|p| runtime::log_read::joint_series(p))
+        .map(|p| runtime::telemetry::log_read::joint_series(p))
         .transpose()?;
     let mut runs = vec![plots::PortraitRun {
         label: log.display().to_string(),

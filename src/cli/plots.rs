@@ -150,7 +150,7 @@ pub struct PortraitRun<'a> {
     /// Legend label.
     pub label: String,
     /// The series.
-    pub series: &'a runtime::log_read::JointSeries,
+    pub series: &'a runtime::telemetry::log_read::JointSeries,
 }
 
 /// The paper's Fig. 4: phase portraits (q vs q̇) of the left and right hip and knee, one panel

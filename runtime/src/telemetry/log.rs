@@ -139,7 +139,7 @@ pub struct Logger {
 }
 
 /// Version of the channel layout and message fields written here. Every channel carries it as
-/// channel metadata `adam_log_schema`; readers (`runtime::log_read`) refuse any other version
+/// channel metadata `adam_log_schema`; readers (`runtime::telemetry::log_read`) refuse any other version
 /// instead of misreading it. Bump it whenever a field changes meaning or disappears.
 pub const LOG_SCHEMA_VERSION: u32 = 1;
 

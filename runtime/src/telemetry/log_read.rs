@@ -14,7 +14,7 @@
 //! naming the channel, never a silent misread.
 //!
 //! ```no_run
-//! let info = runtime::log_read::read_info("logs/run.mcap").unwrap();
+//! let info = runtime::telemetry::log_read::read_info("logs/run.mcap").unwrap();
 //! println!("{info}");
 //! ```
 

@@ -20,7 +20,7 @@
 //! `cargo run --release -- replay --mint tests/fixtures` ([`mint_fixtures`]) and commit them.
 //!
 //! ```no_run
-//! let report = runtime::replay::replay("tests/fixtures/walk.mcap").unwrap();
+//! let report = runtime::telemetry::replay::replay("tests/fixtures/walk.mcap").unwrap();
 //! assert!(report.divergence.is_none(), "{report}");
 //! ```
 

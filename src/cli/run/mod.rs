@@ -108,7 +108,7 @@ fn parse_duration_s(text: &str) -> Result<f64, String> {
 /// the keyboard.
 fn sim_walk_operated(
     setup: &runtime::Setup,
-    options: &runtime::sim_run::SimWalkOptions,
+    options: &runtime::sim::run::SimWalkOptions,
     keyboard: bool,
 ) -> Result<()> {
     use runtime::operator::{self, SharedHandle};
@@ -123,7 +123,7 @@ fn sim_walk_operated(
         // The thread ends with stdin; it is not joined (a blocked read must not hold the exit).
         operator::spawn_keyboard(std::io::BufReader::new(std::io::stdin()), shared);
     }
-    let report = runtime::sim_run::walk_with_operator(setup, options, Some(receiver));
+    let report = runtime::sim::run::walk_with_operator(setup, options, Some(receiver));
     stop.store(true, std::sync::atomic::Ordering::Release);
     let _ = forwarder.join();
     let report = report?;
@@ -135,13 +135,13 @@ fn sim_walk_operated(
 }
 
 /// Walk in simulation and print the report.
-fn sim_walk(setup: &runtime::Setup, options: &runtime::sim_run::SimWalkOptions) -> Result<()> {
+fn sim_walk(setup: &runtime::Setup, options: &runtime::sim::run::SimWalkOptions) -> Result<()> {
     if let Some(dir) = options.log_path.as_ref().and_then(|p| p.parent()) {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
     }
-    let report = runtime::sim_run::walk(setup, options)?;
+    let report = runtime::sim::run::walk(setup, options)?;
     println!("{report}");
     if let (Some(path), Some(log)) = (&options.log_path, &report.summary.log) {
         let counts = LogCounts {
@@ -171,7 +171,7 @@ pub(crate) fn demo() -> Result<()> {
         g.speed_mps,
         config.display()
     );
-    let mut options = runtime::sim_run::SimWalkOptions::new(30.0);
+    let mut options = runtime::sim::run::SimWalkOptions::new(30.0);
     options.log_path = Some(timestamped_log_path());
     sim_walk(&setup, &options)
 }
@@ -197,14 +197,14 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
     }
     match backend {
         Backend::Sim => {
-            let mut options = runtime::sim_run::SimWalkOptions::new(duration);
+            let mut options = runtime::sim::run::SimWalkOptions::new(duration);
             options.belt_speed_mps = belt;
             options.log_path = log;
             options.seed = seed;
             options.real_time = real_time;
             options.faults = faults
                 .as_deref()
-                .map(runtime::faults::FaultProfile::resolve)
+                .map(runtime::sim::faults::FaultProfile::resolve)
                 .transpose()?;
             if real_time {
                 sim_walk_operated(&setup, &options, keyboard)
@@ -233,9 +233,9 @@ pub(crate) fn soak(args: SoakArgs) -> Result<()> {
         config,
     } = args;
     let (faults, config, gait) = (faults.as_str(), config.as_path(), gait.as_path());
-    let profile = runtime::faults::FaultProfile::resolve(faults)?;
+    let profile = runtime::sim::faults::FaultProfile::resolve(faults)?;
     let setup = runtime::Setup::load(config, gait)?;
-    let options = runtime::sim_run::SoakOptions {
+    let options = runtime::sim::run::SoakOptions {
         duration_s: minutes * 60.0,
         profile,
         seed,
@@ -244,7 +244,7 @@ pub(crate) fn soak(args: SoakArgs) -> Result<()> {
     println!("adam soak: {minutes} min of simulated walking, faults `{faults}`, seed {seed}");
     let wall = std::time::Instant::now();
     let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let report = runtime::sim_run::soak(&setup, &options, |r| {
+    let report = runtime::sim::run::soak(&setup, &options, |r| {
         if tty {
             eprint!("\r{:.1} s simulated, {} episodes", r.sim_time_s, r.episodes);
         }

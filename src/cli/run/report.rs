@@ -2,7 +2,7 @@
 //! units: a fall's cause, the log's counts, a safety trip, and a run on the robot over CAN.
 //! (A run on the robot has no report type in `runtime` yet; this one would move there.)
 
-use drivers::sim::FallCause;
+use drivers::sim::robot::FallCause;
 use model::Side;
 use runtime::rt_loop::{RealtimeStatus, TickTimes, TrackingStats};
 use runtime::safety::Trip;
