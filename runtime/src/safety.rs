@@ -96,6 +96,79 @@ pub enum Trip {
     },
 }
 
+/// A trip for a user: the reason, its values and their units, e.g. `joint limit: slot 3 at 1.200 rad,
+/// outside [-1.000, 1.000] rad`.
+impl std::fmt::Display for Trip {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Trip::EStop => write!(f, "operator e-stop"),
+            Trip::JointLimit {
+                slot,
+                q_rad,
+                lower_rad,
+                upper_rad,
+            } => write!(
+                f,
+                "joint limit: slot {slot} at {q_rad:.3} rad, outside [{lower_rad:.3}, {upper_rad:.3}] rad"
+            ),
+            Trip::TorqueSaturation {
+                slot,
+                tau_nm,
+                limit_nm,
+                ticks,
+            } => write!(
+                f,
+                "torque saturation: slot {slot} at {tau_nm:.2} N·m (limit {limit_nm:.2} N·m) for {ticks} ticks"
+            ),
+            Trip::Fall {
+                pitch_rad,
+                limit_rad,
+            } => write!(
+                f,
+                "fall: pitch {pitch_rad:.3} rad past the limit of {limit_rad:.3} rad"
+            ),
+            Trip::OverTemperature {
+                slot,
+                temperature_c,
+                limit_c,
+            } => write!(
+                f,
+                "over temperature: slot {slot} at {temperature_c:.1} °C (limit {limit_c:.1} °C)"
+            ),
+            Trip::MotorFault { slot, flags } => {
+                write!(f, "motor fault: slot {slot}, fault flags {flags:#04x}")
+            }
+            Trip::MissingReplies { slot, consecutive } => write!(
+                f,
+                "missing replies: slot {slot}, {consecutive} in a row"
+            ),
+            Trip::ImuStale { age_s, limit_s } if age_s.is_infinite() => write!(
+                f,
+                "IMU stale: no sample ever arrived (limit {limit_s:.3} s)"
+            ),
+            Trip::ImuStale { age_s, limit_s } => write!(
+                f,
+                "IMU stale: newest sample {age_s:.3} s old (limit {limit_s:.3} s)"
+            ),
+            Trip::ImuImplausible {
+                gyro_rad_s,
+                accel_norm_mps2,
+            } => write!(
+                f,
+                "IMU implausible: gyro {gyro_rad_s:.3} rad/s, accelerometer norm {accel_norm_mps2:.2} m/s²"
+            ),
+            Trip::OverrunStreak { streak, limit } => write!(
+                f,
+                "overrun streak: {streak} deadlines missed in a row (limit {limit})"
+            ),
+            Trip::StepTimeout { elapsed_s, limit_s } => write!(
+                f,
+                "step timeout: {elapsed_s:.3} s into the step (limit {limit_s:.3} s)"
+            ),
+        }
+    }
+}
+
 impl Trip {
     /// A stable numeric code (telemetry, `StateSample::trip_code`); 0 means no trip.
     pub fn code(&self) -> u32 {
@@ -340,6 +413,40 @@ impl SafetyMonitor {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
+    #[test]
+    fn trips_name_the_reason_the_values_and_their_units() {
+        let text = |t: Trip| t.to_string();
+        assert_eq!(text(Trip::EStop), "operator e-stop");
+        assert_eq!(
+            text(Trip::JointLimit {
+                slot: 3,
+                q_rad: 1.2,
+                lower_rad: -1.0,
+                upper_rad: 1.0
+            }),
+            "joint limit: slot 3 at 1.200 rad, outside [-1.000, 1.000] rad"
+        );
+        assert_eq!(
+            text(Trip::MotorFault { slot: 1, flags: 5 }),
+            "motor fault: slot 1, fault flags 0x05"
+        );
+        assert_eq!(
+            text(Trip::ImuStale {
+                age_s: f64::INFINITY,
+                limit_s: 0.05
+            }),
+            "IMU stale: no sample ever arrived (limit 0.050 s)"
+        );
+        assert_eq!(
+            text(Trip::OverTemperature {
+                slot: 0,
+                temperature_c: 91.26,
+                limit_c: 90.0
+            }),
+            "over temperature: slot 0 at 91.3 °C (limit 90.0 °C)"
+        );
+    }
+
     use super::*;
     use crate::slots::SlotLayout;
 

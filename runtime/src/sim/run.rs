@@ -541,12 +541,10 @@ impl std::fmt::Display for SimWalkReport {
             t.rms_rad(3).to_degrees(),
             t.walk_ticks
         )?;
-        let trip = s
-            .trip
-            .map_or_else(|| "none".to_string(), |t| format!("{t:?}"));
+        let trip = s.trip.map_or_else(|| "none".to_string(), |t| t.to_string());
         let fall = self
             .fall
-            .map_or_else(|| "none".to_string(), |(t, w)| format!("{w:?} at {t:.3} s"));
+            .map_or_else(|| "none".to_string(), |(t, w)| format!("{w} at {t:.3} s"));
         if let Some(rms) = t.pitch_rms_rad() {
             writeln!(
                 f,

@@ -5,7 +5,7 @@ mod report;
 
 use crate::cli::paths::timestamped_log_path;
 use anyhow::{bail, Context, Result};
-use report::{FallText, LogCounts, RobotRunReport};
+use report::{LogCounts, RobotRunReport};
 use std::path::PathBuf;
 
 /// Arguments of `adam run`.
@@ -129,7 +129,7 @@ fn sim_walk_operated(
     let report = report?;
     println!("{report}");
     if let Some((t, what)) = report.fall {
-        bail!("the robot fell ({}) at {t:.3} s", FallText(what));
+        bail!("the robot fell ({}) at {t:.3} s", what);
     }
     Ok(())
 }
@@ -152,7 +152,7 @@ fn sim_walk(setup: &runtime::Setup, options: &runtime::sim::run::SimWalkOptions)
         println!("log: {} ({counts})", path.display());
     }
     if let Some((t_s, what)) = report.fall {
-        bail!("the robot fell ({}) at {t_s:.3} s", FallText(what));
+        bail!("the robot fell ({}) at {t_s:.3} s", what);
     }
     Ok(())
 }

@@ -2,27 +2,10 @@
 //! units: a fall's cause, the log's counts, a safety trip, and a run on the robot over CAN.
 //! (A run on the robot has no report type in `runtime` yet; this one would move there.)
 
-use drivers::sim::robot::FallCause;
-use model::Side;
 use runtime::rt_loop::{RealtimeStatus, TickTimes, TrackingStats};
 use runtime::safety::Trip;
 use runtime::RunSummary;
 use std::fmt;
-
-/// What made the simulated robot fall, e.g. `left knee on the ground`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct FallText(pub(crate) FallCause);
-
-impl fmt::Display for FallText {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0 {
-            FallCause::Torso => f.write_str("torso on the ground"),
-            FallCause::Knee(Side::Left) => f.write_str("left knee on the ground"),
-            FallCause::Knee(Side::Right) => f.write_str("right knee on the ground"),
-            FallCause::Pitch => f.write_str("torso pitched past its limit"),
-        }
-    }
-}
 
 /// What the logger wrote, e.g. `60001 records, 420007 MCAP messages, 0 records dropped`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -42,82 +25,6 @@ impl fmt::Display for LogCounts {
             "{} records, {} MCAP messages, {} records dropped",
             self.records, self.messages, self.dropped
         )
-    }
-}
-
-/// A safety trip with its values and units, e.g. `joint limit: slot 3 at 1.200 rad, outside
-/// [-1.000, 1.000] rad`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct TripText(pub(crate) Trip);
-
-impl fmt::Display for TripText {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.0 {
-            Trip::EStop => write!(f, "operator e-stop"),
-            Trip::JointLimit {
-                slot,
-                q_rad,
-                lower_rad,
-                upper_rad,
-            } => write!(
-                f,
-                "joint limit: slot {slot} at {q_rad:.3} rad, outside [{lower_rad:.3}, {upper_rad:.3}] rad"
-            ),
-            Trip::TorqueSaturation {
-                slot,
-                tau_nm,
-                limit_nm,
-                ticks,
-            } => write!(
-                f,
-                "torque saturation: slot {slot} at {tau_nm:.2} N·m (limit {limit_nm:.2} N·m) for {ticks} ticks"
-            ),
-            Trip::Fall {
-                pitch_rad,
-                limit_rad,
-            } => write!(
-                f,
-                "fall: pitch {pitch_rad:.3} rad past the limit of {limit_rad:.3} rad"
-            ),
-            Trip::OverTemperature {
-                slot,
-                temperature_c,
-                limit_c,
-            } => write!(
-                f,
-                "over temperature: slot {slot} at {temperature_c:.1} °C (limit {limit_c:.1} °C)"
-            ),
-            Trip::MotorFault { slot, flags } => {
-                write!(f, "motor fault: slot {slot}, fault flags {flags:#04x}")
-            }
-            Trip::MissingReplies { slot, consecutive } => write!(
-                f,
-                "missing replies: slot {slot}, {consecutive} in a row"
-            ),
-            Trip::ImuStale { age_s, limit_s } if age_s.is_infinite() => write!(
-                f,
-                "IMU stale: no sample ever arrived (limit {limit_s:.3} s)"
-            ),
-            Trip::ImuStale { age_s, limit_s } => write!(
-                f,
-                "IMU stale: newest sample {age_s:.3} s old (limit {limit_s:.3} s)"
-            ),
-            Trip::ImuImplausible {
-                gyro_rad_s,
-                accel_norm_mps2,
-            } => write!(
-                f,
-                "IMU implausible: gyro {gyro_rad_s:.3} rad/s, accelerometer norm {accel_norm_mps2:.2} m/s²"
-            ),
-            Trip::OverrunStreak { streak, limit } => write!(
-                f,
-                "overrun streak: {streak} deadlines missed in a row (limit {limit})"
-            ),
-            Trip::StepTimeout { elapsed_s, limit_s } => write!(
-                f,
-                "step timeout: {elapsed_s:.3} s into the step (limit {limit_s:.3} s)"
-            ),
-        }
     }
 }
 
@@ -241,7 +148,7 @@ impl fmt::Display for RobotRunReport {
             writeln!(f, "tracking RMS: no walk ticks")?;
         }
         match self.trip {
-            Some(trip) => writeln!(f, "safety trip: {}", TripText(trip))?,
+            Some(trip) => writeln!(f, "safety trip: {}", trip)?,
             None => writeln!(f, "safety trips: none")?,
         }
         writeln!(
@@ -277,19 +184,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn falls_and_log_counts_read_as_words_and_numbers() {
-        assert_eq!(
-            FallText(FallCause::Torso).to_string(),
-            "torso on the ground"
-        );
-        assert_eq!(
-            FallText(FallCause::Knee(Side::Right)).to_string(),
-            "right knee on the ground"
-        );
-        assert_eq!(
-            FallText(FallCause::Pitch).to_string(),
-            "torso pitched past its limit"
-        );
+    fn log_counts_read_as_numbers_with_their_names() {
         let counts = LogCounts {
             records: 60001,
             messages: 180001,
@@ -298,40 +193,6 @@ mod tests {
         assert_eq!(
             counts.to_string(),
             "60001 records, 180001 MCAP messages, 0 records dropped"
-        );
-    }
-
-    #[test]
-    fn trips_name_the_reason_the_values_and_their_units() {
-        let text = |t| TripText(t).to_string();
-        assert_eq!(text(Trip::EStop), "operator e-stop");
-        assert_eq!(
-            text(Trip::JointLimit {
-                slot: 3,
-                q_rad: 1.2,
-                lower_rad: -1.0,
-                upper_rad: 1.0
-            }),
-            "joint limit: slot 3 at 1.200 rad, outside [-1.000, 1.000] rad"
-        );
-        assert_eq!(
-            text(Trip::MotorFault { slot: 1, flags: 5 }),
-            "motor fault: slot 1, fault flags 0x05"
-        );
-        assert_eq!(
-            text(Trip::ImuStale {
-                age_s: f64::INFINITY,
-                limit_s: 0.05
-            }),
-            "IMU stale: no sample ever arrived (limit 0.050 s)"
-        );
-        assert_eq!(
-            text(Trip::OverTemperature {
-                slot: 0,
-                temperature_c: 91.26,
-                limit_c: 90.0
-            }),
-            "over temperature: slot 0 at 91.3 °C (limit 90.0 °C)"
         );
     }
 

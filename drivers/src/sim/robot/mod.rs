@@ -208,6 +208,18 @@ pub enum FallCause {
     Pitch,
 }
 
+/// What fell, for a user, e.g. `left knee on the ground`.
+impl core::fmt::Display for FallCause {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            FallCause::Torso => f.write_str("torso on the ground"),
+            FallCause::Knee(Side::Left) => f.write_str("left knee on the ground"),
+            FallCause::Knee(Side::Right) => f.write_str("right knee on the ground"),
+            FallCause::Pitch => f.write_str("torso pitched past its limit"),
+        }
+    }
+}
+
 /// A foot touchdown: the plastic impact and the step it ended.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Touchdown {
@@ -792,5 +804,20 @@ impl Imu for RobotSim {
             self.imu_held = fresh;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_fall_reads_as_words() {
+        assert_eq!(FallCause::Torso.to_string(), "torso on the ground");
+        assert_eq!(
+            FallCause::Knee(Side::Right).to_string(),
+            "right knee on the ground"
+        );
+        assert_eq!(FallCause::Pitch.to_string(), "torso pitched past its limit");
     }
 }
