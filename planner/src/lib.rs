@@ -16,10 +16,16 @@
 //!
 //! - [`nlp`]: the NLP trait, the native interior point and the ripopt backend, their statuses
 //!   and statistics (iterations, restoration, time by phase), tested on the Hock–Schittkowski
-//!   collection.
+//!   collection. Inside: `nlp/interface` (the problem trait, options, solver trait, outcome
+//!   and errors every backend shares), `nlp/native` (the interior point: iteration, Newton
+//!   step, line search, restoration, KKT system), `nlp/ripopt_backend.rs`, and `nlp/solve.rs`
+//!   (the choice of backend, above both).
 //! - [`biped`]: the robot in pinned-stance coordinates, found in the URDF by the naming
 //!   convention of [`model::robot`].
 //! - [`collocation`]: the HZD gait optimization as a sparse NLP (its docs list every constraint).
+//!   Inside: `problem` (building it), `layout`, `blocks`, `constraints` (blocks and bounds),
+//!   `residuals` and `design` (what a block computes), `cost`, `sparsity`, `derivatives`
+//!   (the dual-number sweeps) and `nlp_problem` (the [`nlp::NlpProblem`] implementation).
 //! - [`guess`]: the hand-built first step the feasibility solve starts from.
 //! - [`plan`]: the paper's two-step solve and the gait file it writes.
 //! - [`verify`]: the independent check of a gait (`adam gait check`).

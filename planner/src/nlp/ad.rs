@@ -10,7 +10,7 @@
 
 use num_dual::{Dual64, DualNum, HyperDual64};
 
-use super::problem::{DomainError, NlpProblem, SparsityPattern};
+use super::interface::{DomainError, NlpProblem, SparsityPattern};
 
 /// A nonlinear program written once, generic over a dual-number scalar `D`.
 pub trait AdModel {

@@ -4,7 +4,7 @@
 //! Only for tests and diagnosis: it costs O(n) function evaluations and
 //! dense n×n storage, and no solver calls it.
 
-use super::problem::{DomainError, NlpProblem};
+use super::interface::{DomainError, NlpProblem};
 
 /// Largest discrepancies found by [`check_derivatives`].
 ///

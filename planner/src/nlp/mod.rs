@@ -7,7 +7,7 @@
 //!
 //! ```text
 //! NlpProblem ──validate──▶ backend adapter ──▶ ripopt IPM ─────────────▶ Solution
-//!   (ours)                 (times evaluations,   or native IPM (ipm, kkt)  (x, λ, z_l, z_u, status,
+//!   (ours)                 (times evaluations,   or native IPM (native)    (x, λ, z_l, z_u, status,
 //!                           relays iteration callback)                     iterations, timings)
 //! ```
 //!
@@ -16,8 +16,17 @@
 //!   forward-mode AD ([`ad::DenseAdProblem`]).
 //! * [`check`]: compare any problem's derivatives with finite differences (tests only;
 //!   no solve loop uses finite differences).
-//! * `ipm` / `kkt` / `restoration` (private; [`NativeSolver`]): the native interior point, its
-//!   KKT system and its feasibility-restoration problem.
+//! * `interface` (private, re-exported here): the vocabulary every backend shares — the
+//!   [`NlpProblem`] trait, [`SolveOptions`], the [`NlpSolver`] trait and its iteration callback,
+//!   [`Solution`] with its [`SolveStatus`] and [`SolveStatistics`], [`NlpError`]. It imports
+//!   nothing else from `nlp`.
+//! * `native` (private; [`NativeSolver`]): the native interior point — its state (`ipm`), start
+//!   (`start`), main loop (`iteration`), Newton step with inertia correction (`newton`), filter
+//!   line search (`line_search`), restoration phase (`restore`, on the `restoration` problem),
+//!   evaluations and measures (`evaluate`), KKT system (`kkt`) and constants (`constants`).
+//! * `ripopt_backend` (private; [`RipoptSolver`]): the adapter to ripopt.
+//! * `solve` and `validate` (private; [`solve`]): the checks of a problem and its options, and
+//!   the choice of backend by [`Backend`], above both backends.
 //! * [`lanes`]: a real type of L lanes, so that one evaluation carries L dual seeds (the
 //!   collocation problem's Jacobian columns and Hessian pairs, four at a time).
 //!
@@ -122,12 +131,10 @@
 //! Its restoration phase is younger than ripopt's: the planner re-solves a stage whose native
 //! restoration fails with ripopt.
 
-mod ipm;
-mod kkt;
-mod problem;
-mod restoration;
+mod interface;
+mod native;
 mod ripopt_backend;
-mod solver;
+mod solve;
 #[cfg(test)]
 mod test_problems;
 mod validate;
@@ -136,11 +143,11 @@ pub mod ad;
 pub mod check;
 pub mod lanes;
 
-pub use ipm::NativeSolver;
-pub use problem::{DomainError, NlpProblem, SparsityPattern};
-pub use ripopt_backend::RipoptSolver;
-pub use solver::{
-    solve, solve_with_callback, sum_if_both, Backend, EvaluationCounts, IterationControl,
-    IterationReport, NlpError, NlpSolver, PhaseTimes, Result, Solution, SolveOptions,
-    SolveStatistics, SolveStatus, WarmStart,
+pub use interface::{
+    sum_if_both, Backend, DomainError, EvaluationCounts, IterationControl, IterationReport,
+    NlpError, NlpProblem, NlpSolver, PhaseTimes, Result, Solution, SolveOptions, SolveStatistics,
+    SolveStatus, SparsityPattern, WarmStart,
 };
+pub use native::NativeSolver;
+pub use ripopt_backend::RipoptSolver;
+pub use solve::{solve, solve_with_callback};

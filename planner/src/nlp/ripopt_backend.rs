@@ -14,10 +14,9 @@ use std::cell::{Cell, RefCell};
 use std::os::raw::{c_double, c_int, c_void};
 use std::time::{Duration, Instant};
 
-use super::problem::{DomainError, NlpProblem};
-use super::solver::{
-    EvaluationCounts, IterationControl, IterationReport, NlpSolver, Result, Solution, SolveOptions,
-    SolveStatistics, SolveStatus, WarmStart,
+use super::interface::{
+    DomainError, EvaluationCounts, IterationControl, IterationReport, NlpProblem, NlpSolver,
+    Result, Solution, SolveOptions, SolveStatistics, SolveStatus, WarmStart,
 };
 
 /// The [`Backend::Ripopt`](super::Backend::Ripopt) solver.

@@ -1,8 +1,7 @@
 //! Checks a problem before any backend sees it, so malformed input becomes a
 //! typed [`NlpError`] instead of a backend panic or a silent wrong answer.
 
-use super::problem::{NlpProblem, SparsityPattern};
-use super::solver::{NlpError, Result, WarmStart};
+use super::interface::{NlpError, NlpProblem, Result, SparsityPattern, WarmStart};
 
 /// Checks bounds, patterns, the initial point and warm-start lengths.
 pub(crate) fn validate_problem(

@@ -10,7 +10,7 @@
 //! the least ℓ₁ constraint violation near x̄. It is an ordinary [`NlpProblem`], solved by the
 //! same interior point (without a restoration phase of its own).
 
-use super::{DomainError, NlpProblem, SparsityPattern};
+use crate::nlp::interface::{DomainError, NlpProblem, SparsityPattern};
 
 /// Variables: x (n), the inequality slacks (one per inequality row), p (m), n (m).
 pub(super) struct Restoration<'a> {
