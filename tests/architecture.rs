@@ -375,19 +375,8 @@ impl Crate {
 
     /// The module a path used in `from` names, following re-exports.
     fn resolve(&self, from: &[String], path: &[String]) -> Option<Vec<String>> {
-        let mut absolute: Vec<String> = match path.first().map(String::as_str) {
-            Some("crate") => path[1..].to_vec(),
-            Some("self") => from.iter().chain(&path[1..]).cloned().collect(),
-            Some("super") => {
-                let mut base = from.to_vec();
-                let mut rest = path;
-                while rest.first().is_some_and(|s| s == "super") {
-                    base.pop()?;
-                    rest = &rest[1..];
-                }
-                base.extend(rest.iter().cloned());
-                base
-            }
+        let mut absolute = match path.first().map(String::as_str) {
+            Some("crate" | "self" | "super") => self.absolute(from, path)?,
             Some(first) => {
                 // 2018 paths: a child module of `from` by its bare name
                 let mut child = from.to_vec();
@@ -423,6 +412,7 @@ impl Crate {
         None
     }
 
+    /// `path` as written in `from` (`crate::`, `self::`, `super::` or relative) made absolute.
     fn absolute(&self, from: &[String], path: &[String]) -> Option<Vec<String>> {
         match path.first().map(String::as_str) {
             Some("crate") => Some(path[1..].to_vec()),

@@ -16,7 +16,6 @@
 //! last good sample, repeated with fresh time stamps).
 
 use crate::noise::gaussian;
-use crate::sim::{bus::SimBus, plant::JointPlant};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thiserror::Error;
@@ -64,16 +63,6 @@ pub trait Imu {
             accel_x_mps2: sample.accel_x_mps2,
             accel_z_mps2: sample.accel_z_mps2,
         })
-    }
-}
-
-/// A simulated bus whose plant also simulates the torso IMU (the robot simulator) is that IMU.
-impl<P: JointPlant + Imu> Imu for SimBus<P> {
-    fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
-        self.plant_mut().read(out)
-    }
-    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
-        self.plant_mut().read_at(t_s)
     }
 }
 

@@ -33,6 +33,7 @@
 
 use crate::a1::{self, Command, ErrorFlags, Frame, MotorId, Reply, Special};
 use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation};
+use crate::imu::{Imu, ImuError, ImuSample};
 use crate::sim::firmware::{A1Model, Firmware, SimMotor, TickPeriod};
 use crate::sim::plant::JointPlant;
 use crate::sim::wire::{
@@ -486,6 +487,16 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
         }
         self.state = Lifecycle::Configured;
         self.special_to_all(Special::Disable)
+    }
+}
+
+/// A simulated bus whose plant also simulates the torso IMU (the robot simulator) is that IMU.
+impl<P: JointPlant + Imu> Imu for SimBus<P> {
+    fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
+        self.plant_mut().read(out)
+    }
+    fn read_at(&mut self, t_s: f64) -> Option<ImuSample> {
+        self.plant_mut().read_at(t_s)
     }
 }
 
