@@ -50,7 +50,7 @@ pub enum ModelError {
         value: f64,
     },
     /// A joint axis or origin leaves the sagittal (x–z) plane.
-    #[error("{origin}: joint '{joint}' is not planar: {what} = {value:?} (revolute axes must be ±y, prismatic axes must lie in x–z, origins may only pitch)")]
+    #[error("{origin}: joint '{joint}' is not planar: {what} = \"{}\" (revolute axes must be ±y, prismatic axes must lie in x–z, origins may only pitch)", triple(value))]
     NonPlanar {
         /// File name or `<string>`.
         origin: String,
@@ -161,6 +161,51 @@ pub enum ModelError {
         /// Why it is rejected.
         reason: String,
     },
+    /// A URDF attribute of a link or joint has a value we refuse (not a number, the wrong count
+    /// of numbers, negative, a name used twice).
+    #[error("{origin}: {element}: {field} = \"{value}\": {reason}")]
+    UrdfField {
+        /// File name or `<string>`.
+        origin: String,
+        /// The element, e.g. `link 'torso'`, `joint 'left_knee_pitch'`.
+        element: String,
+        /// The attribute, e.g. `origin xyz`, `inertia ixx`, `name`.
+        field: String,
+        /// The value as written (or computed).
+        value: String,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// The URDF that a gait file names cannot be read.
+    #[error("{gait}: field 'robot.urdf' = \"{urdf}\" names {}, which cannot be read: {error}", path.display())]
+    GaitUrdf {
+        /// The gait file that names the URDF.
+        gait: String,
+        /// The path as written in the gait file.
+        urdf: String,
+        /// The path it resolves to (relative to the gait file's folder).
+        path: PathBuf,
+        /// The OS error.
+        error: std::io::Error,
+    },
+    /// A JSON document does not parse or does not have the expected shape; the field is located
+    /// from the parser's line and column.
+    #[error(
+        "{origin}: line {line}, column {column}: {}{message}",
+        field_text(field)
+    )]
+    Json {
+        /// File name.
+        origin: String,
+        /// Line of the error, 1-based.
+        line: usize,
+        /// Column of the error, 1-based.
+        column: usize,
+        /// Dotted path of the field at the error, e.g. `bezier.alpha[1][3]` (empty at the top).
+        field: String,
+        /// What the parser said, without its position.
+        message: String,
+    },
     /// A JSON or TOML document could not be parsed.
     #[error("{origin}: {message}")]
     Parse {
@@ -169,4 +214,17 @@ pub enum ModelError {
         /// What the parser said (it includes line and column).
         message: String,
     },
+}
+
+/// A vector as URDF writes it: `0 1 0`.
+fn triple(v: &[f64; 3]) -> String {
+    format!("{} {} {}", v[0], v[1], v[2])
+}
+
+fn field_text(field: &str) -> String {
+    if field.is_empty() {
+        String::new()
+    } else {
+        format!("field '{field}': ")
+    }
 }

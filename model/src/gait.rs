@@ -5,10 +5,15 @@
 //! for ADAM. With the state-based phase, `y^d_i(τ) = Bézier(α_i, τ)` with τ from
 //! [`crate::phase::state_phase`]. The file describes one step with `stance_leg` in stance; the
 //! next step uses the same α with the legs relabeled.
+//!
+//! [`GaitFile::load`] checks the file on its own (errors name the field, and the line where the
+//! JSON does not parse or has the wrong shape); where the gait meets its robot,
+//! [`GaitFile::read_urdf`] and [`GaitFile::check_against`] check it against the URDF it names
+//! (state lengths, output joints, Bézier coefficients within the joint limits).
 
 use crate::bezier::MAX_BEZIER_DEGREE;
 use crate::design::DesignLengths;
-use crate::robot::Side;
+use crate::robot::{PlanarModel, Side};
 use crate::{ModelError, Result};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -235,11 +240,27 @@ impl GaitFile {
 
     /// Parses and validates gait JSON; `origin` names the source in errors.
     pub fn from_json(text: &str, origin: &str) -> Result<Self> {
-        // Check the version before the schema, so a file from another version gets that error.
-        let raw: serde_json::Value = serde_json::from_str(text).map_err(|e| ModelError::Parse {
-            origin: origin.to_string(),
-            message: e.to_string(),
+        let gait = Self::parse(text, origin)?;
+        gait.validate(origin)?;
+        Ok(gait)
+    }
+
+    /// Reads a gait file without validating its values (see [`GaitFile::check_against`]).
+    pub fn load_unchecked(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|error| ModelError::Io {
+            path: path.to_path_buf(),
+            error,
         })?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parses gait JSON into its schema without checking the values; errors name the line, the
+    /// column and the field.
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        // Check the version before the schema, so a file from another version gets that error.
+        let raw: serde_json::Value = serde_json::from_str(text)
+            .map_err(|e| crate::json_path::json_error(text, origin, &e))?;
         let version = raw
             .get("schema_version")
             .cloned()
@@ -248,16 +269,39 @@ impl GaitFile {
             return Err(ModelError::InvalidField {
                 origin: origin.to_string(),
                 field: "schema_version".into(),
-                value: version.to_string(),
+                value: if version.is_null() {
+                    "(missing)".into()
+                } else {
+                    version.to_string()
+                },
                 reason: format!("this build reads gait schema version {GAIT_SCHEMA_VERSION}"),
             });
         }
-        let gait: Self = serde_json::from_value(raw).map_err(|e| ModelError::Parse {
-            origin: origin.to_string(),
-            message: e.to_string(),
-        })?;
-        gait.validate(origin)?;
-        Ok(gait)
+        // From the text, not the value, so that a type error keeps its line and column.
+        serde_json::from_str(text).map_err(|e| crate::json_path::json_error(text, origin, &e))
+    }
+
+    /// The path of the URDF this gait names, relative to the gait file's folder.
+    pub fn urdf_path(&self, gait_path: &Path) -> std::path::PathBuf {
+        gait_path
+            .parent()
+            .unwrap_or_else(|| Path::new("."))
+            .join(&self.robot.urdf)
+    }
+
+    /// Reads the URDF this gait names (relative to `gait_path`'s folder): its path and text. An
+    /// error names the gait file that named it.
+    pub fn read_urdf(&self, gait_path: &Path) -> Result<(std::path::PathBuf, String)> {
+        let path = self.urdf_path(gait_path);
+        match std::fs::read_to_string(&path) {
+            Ok(text) => Ok((path, text)),
+            Err(error) => Err(ModelError::GaitUrdf {
+                gait: gait_path.display().to_string(),
+                urdf: self.robot.urdf.clone(),
+                path,
+                error,
+            }),
+        }
     }
 
     /// Writes the gait as pretty JSON after validating it.
@@ -322,7 +366,7 @@ impl GaitFile {
         {
             return Err(invalid(
                 "robot.sha256".into(),
-                format!("{:?}", self.robot.sha256),
+                format!("\"{}\"", self.robot.sha256),
                 "must be 64 hex digits",
             ));
         }
@@ -378,9 +422,12 @@ impl GaitFile {
         if let Some(state) = &self.initial_state {
             if state.q.len() != state.dq.len() {
                 return Err(invalid(
-                    "initial_state.dq".into(),
-                    format!("{} entries", state.dq.len()),
-                    &format!("must match initial_state.q ({})", state.q.len()),
+                    "initial_state.q".into(),
+                    format!("{} entries", state.q.len()),
+                    &format!(
+                        "initial_state.dq has {}: q and dq need one entry per coordinate of the robot",
+                        state.dq.len()
+                    ),
                 ));
             }
             for (name, v) in [("q", &state.q), ("dq", &state.dq)] {
@@ -432,5 +479,84 @@ impl GaitFile {
             }
         }
         Ok(())
+    }
+}
+
+impl GaitFile {
+    /// Checks the gait against the robot it is to run on, then [validates](GaitFile::validate)
+    /// it: the state vectors have one entry per coordinate of the robot, every output's joint
+    /// exists on both legs, and every Bézier coefficient lies within its joint's limits widened
+    /// by the limit range on either side (the curve may pass a limit a little between
+    /// coefficients; a coefficient a whole range outside is a broken file, not a plan).
+    /// `origin` names the gait file in errors, `robot_origin` the URDF.
+    pub fn check_against(
+        &self,
+        robot: &PlanarModel,
+        origin: &str,
+        robot_origin: &str,
+    ) -> Result<()> {
+        let invalid = |field: String, value: String, reason: String| ModelError::InvalidField {
+            origin: origin.to_string(),
+            field,
+            value,
+            reason,
+        };
+        if let Some(state) = &self.initial_state {
+            for (name, v) in [("q", &state.q), ("dq", &state.dq)] {
+                if v.len() != robot.dof() {
+                    return Err(invalid(
+                        format!("initial_state.{name}"),
+                        format!("{} entries", v.len()),
+                        format!(
+                            "expected {}, one per coordinate of robot '{}' in {robot_origin} ({} of the torso and {} joints)",
+                            robot.dof(),
+                            robot.name,
+                            crate::robot::BASE_DOF,
+                            robot.joints.len()
+                        ),
+                    ));
+                }
+            }
+        }
+        self.validate(origin)?;
+        for (i, output) in self.outputs.iter().enumerate() {
+            for side in [self.stance_leg, self.stance_leg.other()] {
+                let name = output.joint_name(side);
+                let Some(j) = robot.joint_index(&name) else {
+                    return Err(invalid(
+                        format!("outputs[{i}].joint"),
+                        format!("\"{}\"", output.joint),
+                        format!("{robot_origin} has no joint '{name}'"),
+                    ));
+                };
+                let (lower, upper) = (robot.joints[j].lower, robot.joints[j].upper);
+                if !(lower.is_finite() && upper.is_finite()) {
+                    continue;
+                }
+                let margin = upper - lower;
+                for (k, a) in self.bezier.alpha[i].iter().enumerate() {
+                    if *a < lower - margin || *a > upper + margin {
+                        return Err(invalid(
+                            format!("bezier.alpha[{i}][{k}]"),
+                            readable(*a),
+                            format!(
+                                "output '{}' drives joint '{name}', whose limits in {robot_origin} are [{lower}, {upper}] rad; a coefficient may lie at most one limit range ({margin} rad) outside them",
+                                output.name
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A number as a user writes it: `1e300`, not three hundred digits.
+fn readable(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        v.to_string()
     }
 }

@@ -32,6 +32,7 @@ pub mod design;
 pub mod dynamics;
 mod error;
 pub mod gait;
+mod json_path;
 pub mod kinematics;
 pub mod linalg;
 pub mod phase;

@@ -2,6 +2,12 @@
 //! fixed links into their parents (keeping them as named frames) and projects every inertial
 //! onto the sagittal plane (mass, x–z centre of mass, I_yy about the centre of mass, with the
 //! inertial's own rotation applied).
+//!
+//! Before urdf-rs reads the text, a pass over the XML refuses what urdf-rs lets through or
+//! reports without a name: a root element other than `<robot>`, a link or joint name used twice,
+//! a numeric attribute of a joint or inertial that is not the right count of finite numbers, a
+//! negative moment of inertia. Those errors name the link or joint, its line, the attribute and
+//! the value as written.
 
 use crate::robot::{Body, BodyInertia, Frame, Joint, JointKind, JointRole, PlanarModel};
 use crate::{ModelError, Result};
@@ -26,7 +32,7 @@ impl PlanarModel {
 
     /// Loads a planar model from URDF text; `origin` names the source in error messages.
     pub fn from_urdf_str(text: &str, origin: &str) -> Result<Self> {
-        let has_inertial = links_with_inertial(text, origin)?;
+        let has_inertial = scan(text, origin)?;
         let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfSyntax {
             origin: origin.to_string(),
             message: e.to_string(),
@@ -35,60 +41,160 @@ impl PlanarModel {
     }
 }
 
-/// For each `<link>`, whether it has an `<inertial>` child (urdf-rs silently defaults it to zero).
-fn links_with_inertial(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
+/// Where an attribute sits: the element path below `<robot>` and its name in errors.
+const CHECKED_ATTRIBUTES: &[(&[&str], &[&str], &str, usize)] = &[
+    // (element path, attributes, field prefix, numbers per attribute)
+    (&["joint", "origin"], &["xyz", "rpy"], "origin", 3),
+    (&["joint", "axis"], &["xyz"], "axis", 3),
+    (
+        &["joint", "limit"],
+        &["lower", "upper", "effort", "velocity"],
+        "limit",
+        1,
+    ),
+    (
+        &["link", "inertial", "origin"],
+        &["xyz", "rpy"],
+        "inertial origin",
+        3,
+    ),
+    (&["link", "inertial", "mass"], &["value"], "mass", 1),
+    (
+        &["link", "inertial", "inertia"],
+        &["ixx", "ixy", "ixz", "iyy", "iyz", "izz"],
+        "inertia",
+        1,
+    ),
+];
+
+/// Reads the XML once before urdf-rs does, for what urdf-rs lets through or reports without a
+/// name: the root element must be `<robot>`; link and joint names are unique; the numeric
+/// attributes of joints and inertials hold the right count of finite numbers (named with their
+/// link or joint and line); moments of inertia are not negative. Returns, for each `<link>`,
+/// whether it has an `<inertial>` child (urdf-rs silently defaults it to zero).
+fn scan(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
     use quick_xml::events::Event;
     let mut reader = quick_xml::Reader::from_str(text);
     let mut out = HashMap::new();
-    let mut depth = 0usize;
-    let mut current: Option<(String, usize)> = None;
+    // Open elements (names) and the link or joint being read: (kind, name, line).
+    let mut open: Vec<String> = Vec::new();
+    let mut owner: Option<(String, String, usize)> = None;
+    let mut seen: HashMap<(String, String), usize> = HashMap::new();
+    let mut root_seen = false;
     let syntax = |e: String| ModelError::UrdfSyntax {
         origin: origin.to_string(),
         message: e,
     };
-    let name_of = |e: &quick_xml::events::BytesStart| -> String {
-        e.attributes()
-            .flatten()
-            .find(|a| a.key.as_ref() == b"name")
-            .map(|a| String::from_utf8_lossy(&a.value).into_owned())
-            .unwrap_or_default()
+    let line_at = |pos: u64| {
+        text.as_bytes()[..(pos as usize).min(text.len())]
+            .iter()
+            .filter(|b| **b == b'\n')
+            .count()
+            + 1
     };
     loop {
-        match reader.read_event().map_err(|e| syntax(e.to_string()))? {
-            Event::Start(e) => {
-                depth += 1;
-                if e.name().as_ref() == b"link" && depth == 2 {
-                    let name = name_of(&e);
-                    out.insert(name.clone(), false);
-                    current = Some((name, depth));
-                } else if e.name().as_ref() == b"inertial" {
-                    if let Some((name, d)) = &current {
-                        if depth == d + 1 {
-                            out.insert(name.clone(), true);
-                        }
-                    }
+        let pos = reader.buffer_position();
+        let event = reader.read_event().map_err(|e| syntax(e.to_string()))?;
+        let (e, empty) = match &event {
+            Event::Start(e) => (e.clone(), false),
+            Event::Empty(e) => (e.clone(), true),
+            Event::End(_) => {
+                if open.len() == 2 {
+                    owner = None;
                 }
-            }
-            Event::Empty(e) => {
-                if e.name().as_ref() == b"link" && depth == 1 {
-                    out.insert(name_of(&e), false);
-                } else if e.name().as_ref() == b"inertial" {
-                    if let Some((name, d)) = &current {
-                        if depth == *d {
-                            out.insert(name.clone(), true);
-                        }
-                    }
-                }
-            }
-            Event::End(e) => {
-                if e.name().as_ref() == b"link" {
-                    current = None;
-                }
-                depth = depth.saturating_sub(1);
+                open.pop();
+                continue;
             }
             Event::Eof => break,
-            _ => {}
+            _ => continue,
+        };
+        let line = line_at(pos);
+        let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+        let attr = |key: &str| -> Option<String> {
+            e.attributes()
+                .flatten()
+                .find(|a| a.key.as_ref() == key.as_bytes())
+                .map(|a| String::from_utf8_lossy(&a.value).into_owned())
+        };
+        if open.is_empty() {
+            if root_seen {
+                return Err(syntax(format!(
+                    "line {line}: a second root element <{name}> after </robot>"
+                )));
+            }
+            if name != "robot" {
+                return Err(syntax(format!(
+                    "line {line}: the root element is <{name}>, expected <robot>"
+                )));
+            }
+            root_seen = true;
+        } else if open.len() == 1 && (name == "link" || name == "joint") {
+            let element_name = attr("name").unwrap_or_default();
+            if let Some(first) = seen.insert((name.clone(), element_name.clone()), line) {
+                return Err(ModelError::UrdfField {
+                    origin: origin.to_string(),
+                    element: format!("{name} '{element_name}' (line {line})"),
+                    field: "name".into(),
+                    value: element_name,
+                    reason: format!("a {name} of this name is defined already (line {first})"),
+                });
+            }
+            if name == "link" {
+                out.insert(element_name.clone(), false);
+            }
+            owner = Some((name.clone(), element_name, line));
+        } else if let Some((kind, owner_name, _)) = &owner {
+            let mut path: Vec<&str> = open[1..].iter().map(String::as_str).collect();
+            path.push(&name);
+            if kind == "link" && path == ["link", "inertial"] {
+                out.insert(owner_name.clone(), true);
+            }
+            for (at, keys, prefix, count) in CHECKED_ATTRIBUTES {
+                if path != *at {
+                    continue;
+                }
+                for key in *keys {
+                    let Some(value) = attr(key) else { continue };
+                    let field = format!("{prefix} {key}");
+                    let bad = |reason: String| ModelError::UrdfField {
+                        origin: origin.to_string(),
+                        element: format!("{kind} '{owner_name}' (line {line})"),
+                        field: field.clone(),
+                        value: value.clone(),
+                        reason,
+                    };
+                    let numbers: Vec<&str> = value.split_whitespace().collect();
+                    if numbers.len() != *count {
+                        return Err(bad(if *count == 1 {
+                            format!("expected one number, found {}", numbers.len())
+                        } else {
+                            format!("expected {count} numbers, found {}", numbers.len())
+                        }));
+                    }
+                    for n in numbers {
+                        match n.parse::<f64>() {
+                            Ok(v) if v.is_finite() => {
+                                if ["ixx", "iyy", "izz"].contains(key) && v < 0.0 {
+                                    return Err(bad(
+                                        "a moment of inertia cannot be negative".into()
+                                    ));
+                                }
+                            }
+                            Ok(_) => return Err(bad(format!("'{n}' is not a finite number"))),
+                            Err(_) => return Err(bad(format!("'{n}' is not a number"))),
+                        }
+                    }
+                }
+            }
         }
+        if !empty {
+            open.push(name);
+        } else if open.len() == 1 {
+            owner = None;
+        }
+    }
+    if !root_seen {
+        return Err(syntax("no <robot> element".into()));
     }
     Ok(out)
 }

@@ -185,3 +185,106 @@ fn feedforward_tables_are_checked_and_interpolate_linearly() {
         );
     }
 }
+
+/// Issue #27: a bare `NaN` (not JSON) and the string `"NaN"` in a numeric field are reported with
+/// the line and the field, not only a position.
+#[test]
+fn a_nan_in_the_json_names_the_line_and_the_field() {
+    let text = serde_json::to_string_pretty(&sample()).expect("serializes");
+    let bare = text.replacen("\"step_length_m\": 0.23", "\"step_length_m\": NaN", 1);
+    let e = GaitFile::from_json(&bare, "g.json").expect_err("bare NaN");
+    let line = 1 + bare[..bare.find("NaN").expect("NaN")].matches('\n').count();
+    assert!(
+        matches!(&e, ModelError::Json { field, line: l, .. } if field == "step_length_m" && *l == line),
+        "{e}"
+    );
+    assert!(e.to_string().contains("JSON has no NaN"), "{e}");
+
+    let mut v: serde_json::Value = serde_json::to_value(sample()).expect("value");
+    v["bezier"]["alpha"][2][4] = serde_json::json!("NaN");
+    let quoted = serde_json::to_string_pretty(&v).expect("text");
+    let e = GaitFile::from_json(&quoted, "g.json").expect_err("string NaN");
+    let m = e.to_string();
+    assert!(
+        m.contains("g.json") && m.contains("field 'bezier.alpha[2][4]'") && m.contains("\"NaN\""),
+        "{m}"
+    );
+}
+
+fn robot() -> model::PlanarModel {
+    model::PlanarModel::from_urdf_file(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/robots/adam_planar.urdf"
+    ))
+    .expect("shipped URDF")
+}
+
+/// Issue #27: a `q` of 5 entries was reported against `dq`; now `q` is named with its length and
+/// the robot's coordinate count.
+#[test]
+fn state_lengths_are_checked_against_the_robot_and_name_the_vector() {
+    let robot = robot();
+    let mut g = sample();
+    g.check_against(&robot, "g.json", "r.urdf")
+        .expect("the sample fits the shipped robot");
+    g.initial_state.as_mut().expect("state").q.truncate(5);
+    let e = g
+        .check_against(&robot, "g.json", "r.urdf")
+        .expect_err("short q")
+        .to_string();
+    assert!(
+        e.contains("initial_state.q") && e.contains("5 entries") && e.contains("expected 11"),
+        "{e}"
+    );
+    // Without the robot, the mismatch still names q first and both lengths.
+    let e = g
+        .validate("g.json")
+        .expect_err("q and dq differ")
+        .to_string();
+    assert!(
+        e.contains("initial_state.q") && e.contains("dq has 11"),
+        "{e}"
+    );
+}
+
+/// Issue #27: a Bézier coefficient of 1e300 was found only in simulation; it is refused up front
+/// against the joint limits, naming the output, the coefficient, the value and the limits.
+#[test]
+fn bezier_coefficients_are_checked_against_the_joint_limits() {
+    let robot = robot();
+    let mut g = sample();
+    g.bezier.alpha[1][3] = 1e300;
+    let e = g
+        .check_against(&robot, "g.json", "r.urdf")
+        .expect_err("1e300")
+        .to_string();
+    assert!(
+        e.contains("bezier.alpha[1][3]")
+            && e.contains("1e300")
+            && e.contains("stance_knee")
+            && e.contains("[0, 2.4] rad"),
+        "{e}"
+    );
+    // One limit range of margin: the knee (limits [0, 2.4]) may plan down to −2.4, not below.
+    g.bezier.alpha[1][3] = -2.39;
+    g.check_against(&robot, "g.json", "r.urdf")
+        .expect("inside the margin");
+    g.bezier.alpha[1][3] = -2.41;
+    assert!(g.check_against(&robot, "g.json", "r.urdf").is_err());
+}
+
+/// Issue #27: a missing URDF named by a relative path says which gait file named it.
+#[test]
+fn a_missing_urdf_names_the_gait_file_that_named_it() {
+    let g = sample();
+    let e = g
+        .read_urdf(std::path::Path::new("/nonexistent/gaits/g.json"))
+        .expect_err("missing")
+        .to_string();
+    assert!(
+        e.contains("/nonexistent/gaits/g.json")
+            && e.contains("robot.urdf")
+            && e.contains("../robots/adam_planar.urdf"),
+        "{e}"
+    );
+}

@@ -121,3 +121,58 @@ fn fixed_links_merge_into_their_parent_with_the_parallel_axis_theorem() {
     let tip = m.frame_index("tip").expect("frame");
     assert_eq!(m.frames[tip].offset_xz_m, [0.0, -0.5]);
 }
+
+/// Issue #27: what urdf-rs accepted or reported without a name: a root tag `<robott>`, a negative
+/// `ixx`, a duplicate link, a two-number `xyz`, a NaN joint origin ("not planar" before).
+#[test]
+fn malformed_attributes_name_the_element_the_field_and_the_value() {
+    let text = robot(&(link("a") + &link("b") + &joint("j", "revolute", "a", "b", "0 1 0")))
+        .replace("<robot ", "<robott ")
+        .replace("</robot>", "</robott>");
+    let e = PlanarModel::from_urdf_str(&text, "test.urdf").expect_err("robott");
+    assert!(
+        matches!(e, ModelError::UrdfSyntax { .. }) && e.to_string().contains("<robott>"),
+        "{e}"
+    );
+
+    let negative = link("a").replacen("ixx=\"0.1\"", "ixx=\"-0.1\"", 1)
+        + &link("b")
+        + &joint("j", "revolute", "a", "b", "0 1 0");
+    let e = load(&negative).expect_err("negative ixx").to_string();
+    assert!(
+        e.contains("link 'a'") && e.contains("inertia ixx") && e.contains("-0.1"),
+        "{e}"
+    );
+
+    let twice = link("a") + &link("b") + &link("b") + &joint("j", "revolute", "a", "b", "0 1 0");
+    let e = load(&twice).expect_err("duplicate").to_string();
+    assert!(
+        e.contains("link 'b'") && e.contains("defined already"),
+        "{e}"
+    );
+
+    let with_origin = |xyz: &str| {
+        link("a")
+            + &link("b")
+            + &joint("knee", "revolute", "a", "b", "0 1 0").replace(
+                "<axis",
+                &format!("<origin xyz=\"{xyz}\" rpy=\"0 0 0\"/><axis"),
+            )
+    };
+    let e = load(&with_origin("0 -0.5"))
+        .expect_err("two numbers")
+        .to_string();
+    assert!(
+        e.contains("joint 'knee'") && e.contains("origin xyz") && e.contains("found 2"),
+        "{e}"
+    );
+    let e = load(&with_origin("NaN 0 -0.5")).expect_err("NaN origin");
+    assert!(
+        matches!(&e, ModelError::UrdfField { field, .. } if field == "origin xyz"),
+        "{e}"
+    );
+    assert!(
+        e.to_string().contains("joint 'knee'") && e.to_string().contains("NaN"),
+        "{e}"
+    );
+}

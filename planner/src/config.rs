@@ -258,7 +258,7 @@ impl PlannerConfig {
             } else {
                 Err(bad(
                     field,
-                    format!("{r:?}"),
+                    format!("[{}, {}]", r[0], r[1]),
                     "must be [lower, upper] with lower ≤ upper",
                 ))
             }

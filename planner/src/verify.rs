@@ -749,17 +749,11 @@ pub fn verify_gait_with(
 }
 
 /// Loads a gait file and the robot it names (its URDF path is relative to the gait file's
-/// folder), refusing a URDF whose SHA-256 differs from the one recorded in the gait.
+/// folder), refusing a URDF whose SHA-256 differs from the one recorded in the gait and a gait
+/// that does not fit the robot ([`GaitFile::check_against`]).
 pub fn load_gait_and_robot(gait_path: &std::path::Path) -> Result<(GaitFile, PlanarModel)> {
-    let gait = GaitFile::load(gait_path)?;
-    let urdf_path = gait_path
-        .parent()
-        .unwrap_or(std::path::Path::new("."))
-        .join(&gait.robot.urdf);
-    let text = std::fs::read_to_string(&urdf_path).map_err(|error| PlannerError::Io {
-        path: urdf_path.display().to_string(),
-        error,
-    })?;
+    let gait = GaitFile::load_unchecked(gait_path)?;
+    let (urdf_path, text) = gait.read_urdf(gait_path)?;
     let hash = model::gait::sha256_hex(&text);
     if hash != gait.robot.sha256 {
         return Err(PlannerError::InvalidField {
@@ -772,7 +766,9 @@ pub fn load_gait_and_robot(gait_path: &std::path::Path) -> Result<(GaitFile, Pla
             ),
         });
     }
-    let model = PlanarModel::from_urdf_str(&text, &urdf_path.display().to_string())?;
+    let urdf_origin = urdf_path.display().to_string();
+    let model = PlanarModel::from_urdf_str(&text, &urdf_origin)?;
+    gait.check_against(&model, &gait_path.display().to_string(), &urdf_origin)?;
     Ok((gait, model))
 }
 

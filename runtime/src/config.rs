@@ -339,7 +339,10 @@ impl RuntimeConfig {
             return Err(RuntimeError::InvalidField {
                 origin: origin.to_string(),
                 field: "schema_version".into(),
-                value: format!("{version:?}"),
+                value: match raw.get("schema_version") {
+                    Some(v) => v.to_string(),
+                    None => "(missing)".into(),
+                },
                 reason: format!("this build reads runtime schema version {RUNTIME_CONFIG_VERSION}"),
             });
         }
@@ -469,7 +472,7 @@ impl RuntimeConfig {
             if m.joint != name {
                 return Err(bad(
                     &format!("leg_motors[{i}].joint"),
-                    format!("{:?}", m.joint),
+                    format!("\"{}\"", m.joint),
                     &format!("slot {i} is {name}"),
                 ));
             }

@@ -97,43 +97,58 @@ pub struct Setup {
 
 impl Setup {
     /// Loads the runtime config, the gait file and the URDF the gait names (relative to the gait
-    /// file's folder), checking the URDF's SHA-256 against the gait.
+    /// file's folder), checking the URDF's SHA-256 and the gait against the robot
+    /// ([`model::gait::GaitFile::check_against`]: state lengths, Bézier coefficients within the
+    /// joint limits).
     pub fn load(
         config_path: impl AsRef<std::path::Path>,
         gait_path: impl AsRef<std::path::Path>,
     ) -> Result<Self> {
         let config = config::RuntimeConfig::load(config_path)?;
         let gait_path = gait_path.as_ref();
-        let gait = model::gait::GaitFile::load(gait_path)?;
-        let urdf_path = gait_path
-            .parent()
-            .unwrap_or_else(|| std::path::Path::new("."))
-            .join(&gait.robot.urdf);
-        let text = std::fs::read_to_string(&urdf_path).map_err(|error| RuntimeError::Io {
-            path: urdf_path.clone(),
-            error,
-        })?;
-        Self::from_parts(config, gait, text, &urdf_path.display().to_string())
+        let gait = model::gait::GaitFile::load_unchecked(gait_path)?;
+        let (urdf_path, text) = gait.read_urdf(gait_path)?;
+        Self::assemble(
+            config,
+            gait,
+            &gait_path.display().to_string(),
+            text,
+            &urdf_path.display().to_string(),
+        )
     }
 
     /// A setup from an already-parsed config and gait and the URDF text the gait names
-    /// (`urdf_origin` names that text in errors), checking the URDF's SHA-256 against the gait.
+    /// (`urdf_origin` names that text in errors), checking the URDF's SHA-256 and the gait
+    /// against the robot.
     pub fn from_parts(
         config: config::RuntimeConfig,
         gait: model::gait::GaitFile,
         urdf_text: String,
         urdf_origin: &str,
     ) -> Result<Self> {
+        Self::assemble(config, gait, "the gait file", urdf_text, urdf_origin)
+    }
+
+    fn assemble(
+        config: config::RuntimeConfig,
+        gait: model::gait::GaitFile,
+        gait_origin: &str,
+        urdf_text: String,
+        urdf_origin: &str,
+    ) -> Result<Self> {
         let sha = model::gait::sha256_hex(&urdf_text);
         if sha != gait.robot.sha256 {
-            return Err(RuntimeError::Gait {
+            return Err(RuntimeError::InvalidField {
+                origin: gait_origin.to_string(),
+                field: "robot.sha256".into(),
+                value: gait.robot.sha256.clone(),
                 reason: format!(
-                    "{urdf_origin} has SHA-256 {sha}, the gait was planned for {}",
-                    gait.robot.sha256
+                    "{urdf_origin} has SHA-256 {sha}: the robot changed since the gait was planned"
                 ),
             });
         }
         let model = model::PlanarModel::from_urdf_str(&urdf_text, urdf_origin)?;
+        gait.check_against(&model, gait_origin, urdf_origin)?;
         Ok(Self {
             config,
             gait,

@@ -146,6 +146,23 @@ pub enum Field {
     Temperature = 8,
 }
 
+impl core::fmt::Display for Field {
+    /// The field's name as in [`Command`] and [`Reply`], with its unit.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::QDes => "q_des_rad",
+            Self::DqDes => "dq_des_rad_s",
+            Self::Kp => "kp_nm_per_rad",
+            Self::Kd => "kd_nm_s_per_rad",
+            Self::TauFf => "tau_ff_nm",
+            Self::Q => "q_rad",
+            Self::Dq => "dq_rad_s",
+            Self::Tau => "tau_nm",
+            Self::Temperature => "temperature_c",
+        })
+    }
+}
+
 /// Fixed-point layout of one field: `physical = raw * quantum + min`, with
 /// `quantum = (max - min) / 2^bits`, raw unsigned, little-endian ("Intel") bit numbering
 /// in the 64-bit payload.
@@ -506,7 +523,7 @@ pub enum DecodeError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
 pub enum EncodeError {
     /// A field is NaN (a NaN command is a bug upstream, never silently sent).
-    #[error("{motor}: field {field:?} is NaN")]
+    #[error("{motor}: field {field} is NaN")]
     NotANumber {
         /// Addressed motor.
         motor: MotorId,
