@@ -146,6 +146,23 @@ pub enum Field {
     Temperature = 8,
 }
 
+impl core::fmt::Display for Field {
+    /// The field's name on the wire, with its unit (`q_des (rad)`).
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Field::QDes => "q_des (rad)",
+            Field::DqDes => "dq_des (rad/s)",
+            Field::Kp => "kp (N·m/rad)",
+            Field::Kd => "kd (N·m·s/rad)",
+            Field::TauFf => "tau_ff (N·m)",
+            Field::Q => "q (rad)",
+            Field::Dq => "dq (rad/s)",
+            Field::Tau => "tau (N·m)",
+            Field::Temperature => "temperature (°C)",
+        })
+    }
+}
+
 /// Fixed-point layout of one field: `physical = raw * quantum + min`, with
 /// `quantum = (max - min) / 2^bits`, raw unsigned, little-endian ("Intel") bit numbering
 /// in the 64-bit payload.
@@ -379,6 +396,38 @@ impl ErrorFlags {
     }
 }
 
+impl core::fmt::Display for ErrorFlags {
+    /// The faults in words (`over-temperature, encoder`), `none` when empty.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let names = [
+            (Self::OVER_TEMPERATURE, "over-temperature"),
+            (Self::OVER_CURRENT, "over-current"),
+            (Self::BAD_VOLTAGE, "bad voltage"),
+            (Self::ENCODER, "encoder fault"),
+        ];
+        let mut first = true;
+        for (flag, name) in names {
+            if self.contains(flag) {
+                write!(f, "{}{name}", if first { "" } else { ", " })?;
+                first = false;
+            }
+        }
+        let unknown = self.0 & !0b1111;
+        if unknown != 0 {
+            write!(
+                f,
+                "{}unknown bits 0x{unknown:02x}",
+                if first { "" } else { ", " }
+            )?;
+            first = false;
+        }
+        if first {
+            f.write_str("none")?;
+        }
+        Ok(())
+    }
+}
+
 /// Motor → host reply (joint-side units).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reply {
@@ -506,7 +555,7 @@ pub enum DecodeError {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
 pub enum EncodeError {
     /// A field is NaN (a NaN command is a bug upstream, never silently sent).
-    #[error("{motor}: field {field:?} is NaN")]
+    #[error("{motor}: field {field} is NaN")]
     NotANumber {
         /// Addressed motor.
         motor: MotorId,
