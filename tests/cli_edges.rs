@@ -216,6 +216,8 @@ fn options_are_accepted_where_a_user_writes_them_and_checked_against_the_config(
     );
     let (ok, _, err) = adam_in(&dir, &["codesign", "sweep", "--grid", "0"]);
     assert!(!ok && err.contains("--grid 0"), "{err}");
+    let (ok, _, err) = adam_in(&dir, &["codesign", "--out-gait", "g.json", "sweep"]);
+    assert!(!ok && err.contains("--out-gait"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

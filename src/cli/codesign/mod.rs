@@ -148,6 +148,14 @@ pub(crate) fn convergence_sweep(
 ) -> Result<()> {
     use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
     let (config, inertia) = (&args.config, args.inertia);
+    for (flag, given) in [
+        ("--out-gait", args.out_gait.is_some()),
+        ("--out-urdf", args.out_urdf.is_some()),
+    ] {
+        if given {
+            bail!("{flag} is not used by `adam codesign sweep` (its outputs go to --out-dir)");
+        }
+    }
     let mut cfg = codesign_config(config, inertia)?;
     if let Some(grid) = grid {
         if !(1..=planner::config::MAX_SWEEP_GRID).contains(&grid) {
