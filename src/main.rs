@@ -6,6 +6,14 @@
 //! (logs, replay, plot), `op` and `model` (model, generate-urdf). What a command prints at
 //! length comes from `Display` types in the group's `report` module; `cli::plots` draws the
 //! figures and `cli::paths` derives file paths.
+//!
+//! **From any folder.** The shipped robots, gaits and configs are found from any working
+//! directory (`cli::shipped`): a relative `configs/…` input missing from the working directory
+//! is looked up in `$ADAM_CONFIG_DIR`, else in the repository the binary was built from, else
+//! in a copy embedded in the binary. Paths inside a file resolve relative to that file.
+//!
+//! **Never over what ships.** Generated gaits, URDFs and sweeps go to `out/` (or the output
+//! named), and a file that exists is written over only with `--force` (`cli::paths`).
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -21,12 +29,23 @@ mod cli;
 #[command(
     name = "adam",
     version,
-    about = "HZD co-design and walking for the ADAM humanoid"
+    about = "HZD co-design and walking for the ADAM humanoid",
+    after_help = AFTER_HELP
 )]
 struct Cli {
     #[command(subcommand)]
     command: Command,
 }
+
+/// What `adam --help` says after the commands: where files are found and written.
+const AFTER_HELP: &str = "\
+Files:
+  Inputs named configs/... (every default, e.g. configs/runtime/adam.toml) are found from any
+  folder: from the working directory if there, else in $ADAM_CONFIG_DIR (a folder laid out like
+  configs/), else in the repository adam was built from, else in a copy built into adam.
+  Paths inside a file (a gait's URDF) are relative to that file.
+  plan, codesign and codesign sweep write under out/ unless told otherwise; no command writes
+  over an existing file without --force.";
 
 #[derive(Subcommand)]
 enum Command {
@@ -126,7 +145,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Codesign(args) => match &args.study {
             None => codesign::codesign(&args),
             Some(CodesignStudy::Sweep { grid, out_dir }) => {
-                codesign::convergence_sweep(&args, *grid, out_dir)
+                codesign::convergence_sweep(&args, *grid, out_dir.as_deref())
             }
         },
         Command::GenerateUrdf(args) => model::write_urdf(args),

@@ -51,6 +51,17 @@ pub enum Lifecycle {
     Active,
 }
 
+impl Lifecycle {
+    /// The state in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Lifecycle::Unconfigured => "unconfigured",
+            Lifecycle::Configured => "configured (motors disabled)",
+            Lifecycle::Active => "active",
+        }
+    }
+}
+
 /// Lifecycle operations, to name the one that was called in the wrong state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Operation {
@@ -62,11 +73,22 @@ pub enum Operation {
     Deactivate,
 }
 
+impl Operation {
+    /// The operation in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Operation::Configure => "configure",
+            Operation::Activate => "activate",
+            Operation::Deactivate => "deactivate",
+        }
+    }
+}
+
 /// Everything that can go wrong on a motor bus. `Copy`, no heap: safe on the hot path.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Error)]
 pub enum BusError {
     /// A lifecycle operation was called in a state that does not allow it.
-    #[error("{operation:?} is not allowed while the bus is {state:?}")]
+    #[error("{} is not allowed while the bus is {}", .operation.name(), .state.name())]
     WrongState {
         /// What was called.
         operation: Operation,
@@ -74,7 +96,7 @@ pub enum BusError {
         state: Lifecycle,
     },
     /// `exchange` was called while the bus is not active.
-    #[error("exchange on a bus that is not active (state {state:?})")]
+    #[error("exchange on a bus that is not active (it is {})", .state.name())]
     NotActive {
         /// State at the time.
         state: Lifecycle,
@@ -135,7 +157,7 @@ pub enum BusError {
         error: DecodeError,
     },
     /// A motor refused to enable (it replied disabled, with these fault flags).
-    #[error("{motor} did not enable (error flags {errors:?})")]
+    #[error("{motor} did not enable (motor faults: {errors})")]
     EnableRefused {
         /// Motor.
         motor: MotorId,
@@ -143,7 +165,11 @@ pub enum BusError {
         errors: ErrorFlags,
     },
     /// The frames of this exchange could not be carried within the budget.
-    #[error("exchange needs {needed:?} of bus time, budget {budget:?}")]
+    #[error(
+        "exchange needs {:.0} µs of bus time, budget {:.0} µs",
+        .needed.as_secs_f64() * 1e6,
+        .budget.as_secs_f64() * 1e6
+    )]
     DeadlineExceeded {
         /// Bus time needed (or spent before giving up).
         needed: Duration,

@@ -59,6 +59,16 @@ pub enum Stuffing {
     WorstCase,
 }
 
+impl Stuffing {
+    /// The assumption in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stuffing::None => "no",
+            Stuffing::WorstCase => "worst-case",
+        }
+    }
+}
+
 /// Bits of a standard-id data frame with `data_bytes` bytes, interframe space included.
 pub const fn frame_bits(data_bytes: u32, stuffing: Stuffing) -> u32 {
     let unstuffed = 47 + 8 * data_bytes;
@@ -252,8 +262,9 @@ pub enum TimingError {
     /// The exchanges of one cycle do not fit in the period.
     #[error(
         "{motors_per_bus} motors per bus at {rate_hz} Hz need {needed_us:.0} µs of bus time \
-         per {period_us:.0} µs period at {bitrate_bps} bit/s ({stuffing:?} stuffing); \
-         at most {max_motors} motors per bus fit, or lower the rate to {max_rate_hz:.0} Hz"
+         per {period_us:.0} µs period at {bitrate_bps} bit/s ({} stuffing); \
+         at most {max_motors} motors per bus fit, or lower the rate to {max_rate_hz:.0} Hz",
+        .stuffing.name()
     )]
     Overloaded {
         /// Requested loop rate \[Hz\].

@@ -324,7 +324,10 @@ fn generate(lengths: [f64; 2]) -> Result<(model::PlanarModel, String)> {
     };
     let (model, urdf) = generate_model(&design).map_err(|e| PlannerError::Robot {
         robot: "adam_planar".into(),
-        reason: format!("GenerateModel({lengths:?}): {e}"),
+        reason: format!(
+            "GenerateModel at thigh {} m, shin {} m: {e}",
+            lengths[0], lengths[1]
+        ),
     })?;
     Ok((model, urdf))
 }

@@ -1,4 +1,10 @@
 //! The planner configuration (`configs/planner/*.toml`): checked data with a schema version.
+//!
+//! Every setting a user may change lives here, the co-design's too: `[codesign]` holds the
+//! design box (thigh and shin length bounds, paper Table I), the initial design, the inertia
+//! coupling and Alg. 1's stopping rule; `[codesign.sweep]` the convergence study's grid and the
+//! cost-of-transport margin that marks a worse local minimum ([`CodesignConfig`],
+//! [`SweepConfig`]). [`PlannerConfig::validate`] names the file, the field and the value.
 
 use crate::{PlannerError, Result};
 use model::Side;
@@ -127,6 +133,33 @@ pub struct CodesignConfig {
     pub tolerance_m: f64,
     /// Alg. 1 outer iterations at most.
     pub max_outer_iterations: usize,
+    /// The convergence study (`adam codesign sweep`).
+    #[serde(default)]
+    pub sweep: SweepConfig,
+}
+
+/// The convergence study's settings (`[codesign.sweep]`, `adam codesign sweep`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepConfig {
+    /// Grid size n: co-designs start from an n × n grid of initial thigh and shin lengths over
+    /// the design box `thigh_m` × `shin_m` (`--grid` overrides it).
+    pub grid: usize,
+    /// A converged run whose cost of transport is more than this fraction above the best run's
+    /// is counted as a worse local minimum (and left out of the table's mean ± std).
+    pub local_minimum_margin: f64,
+}
+
+/// The largest sweep grid accepted (n × n co-designs).
+pub const MAX_SWEEP_GRID: usize = 20;
+
+impl Default for SweepConfig {
+    fn default() -> Self {
+        Self {
+            grid: 5,
+            local_minimum_margin: 0.01,
+        }
+    }
 }
 
 /// How link inertias follow the design in the co-design.
@@ -148,6 +181,7 @@ impl Default for CodesignConfig {
             inertia: InertiaCoupling::Exact,
             tolerance_m: 1e-3,
             max_outer_iterations: 10,
+            sweep: SweepConfig::default(),
         }
     }
 }
@@ -310,6 +344,17 @@ impl PlannerConfig {
             }
         }
         positive("codesign.tolerance_m", c.tolerance_m)?;
+        if !(1..=MAX_SWEEP_GRID).contains(&c.sweep.grid) {
+            return Err(bad(
+                "codesign.sweep.grid",
+                c.sweep.grid.to_string(),
+                &format!("must be in 1..={MAX_SWEEP_GRID} (n × n co-designs)"),
+            ));
+        }
+        nonneg(
+            "codesign.sweep.local_minimum_margin",
+            c.sweep.local_minimum_margin,
+        )?;
         if c.max_outer_iterations == 0 {
             return Err(bad(
                 "codesign.max_outer_iterations",
@@ -360,6 +405,50 @@ mod tests {
             .expect_err("rejected")
             .to_string();
         assert!(e.contains("surprise"), "{e}");
+    }
+
+    #[test]
+    fn the_shipped_adam_config_holds_the_codesign_defaults_and_bad_ones_are_named() {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/planner/adam.toml");
+        let text = std::fs::read_to_string(path).expect("shipped config");
+        let cfg = PlannerConfig::from_toml(&text, path).expect("parses");
+        // The shipped file states today's defaults, so `adam codesign` behaves as before.
+        assert_eq!(cfg.codesign, CodesignConfig::default());
+        for (from, to, field, value) in [
+            (
+                "thigh_m = [0.15, 0.35]",
+                "thigh_m = [0.35, 0.15]",
+                "codesign.thigh_m",
+                "[0.35, 0.15]",
+            ),
+            (
+                "shin_m = [0.15, 0.35]",
+                "shin_m = [0.15, 0.9]",
+                "codesign.shin_m",
+                "[0.15, 0.9]",
+            ),
+            ("grid = 5", "grid = 0", "codesign.sweep.grid", "0"),
+            ("grid = 5", "grid = 21", "codesign.sweep.grid", "21"),
+            (
+                "local_minimum_margin = 0.01",
+                "local_minimum_margin = -0.1",
+                "codesign.sweep.local_minimum_margin",
+                "-0.1",
+            ),
+        ] {
+            assert!(text.contains(from), "{from}");
+            let e = PlannerConfig::from_toml(&text.replace(from, to), "x.toml")
+                .expect_err("rejected")
+                .to_string();
+            assert!(
+                e.contains("x.toml") && e.contains(field) && e.contains(value),
+                "{to}: {e}"
+            );
+        }
+        let e = PlannerConfig::from_toml(&text.replace("grid = 5", "grid = 5\nsize = 3"), "x.toml")
+            .expect_err("unknown field")
+            .to_string();
+        assert!(e.contains("size"), "{e}");
     }
 
     #[test]

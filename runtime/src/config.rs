@@ -1,5 +1,6 @@
 //! The runtime config (`configs/runtime/*.toml`): loop rate, buses, motors, gains, ramp,
-//! safety limits, held joint positions, logging and telemetry.
+//! safety limits, held joint positions, logging and telemetry, and the treadmill's belt speed
+//! range ([`TreadmillConfig`]: every belt speed a run asks for is checked against it).
 //!
 //! Checked data: `deny_unknown_fields` everywhere, a `schema_version`, and [`RuntimeConfig::validate`]
 //! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
@@ -280,6 +281,43 @@ pub struct TelemetryConfig {
     pub service_name: String,
 }
 
+/// The treadmill the robot walks on (the simulated one, and the lab's).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TreadmillConfig {
+    /// Belt speeds the treadmill can run, [lowest, highest], m/s: every belt speed a run asks
+    /// for (`adam run --belt`, the gait's speed, a fault profile's belt step) must lie inside.
+    pub belt_speed_range_mps: [f64; 2],
+}
+
+/// The belt speed range of a config without a `[treadmill]` section, m/s.
+pub const DEFAULT_BELT_SPEED_RANGE_MPS: [f64; 2] = [0.0, 0.5];
+
+impl Default for TreadmillConfig {
+    fn default() -> Self {
+        Self {
+            belt_speed_range_mps: DEFAULT_BELT_SPEED_RANGE_MPS,
+        }
+    }
+}
+
+impl TreadmillConfig {
+    /// Checks a belt speed asked for by `what` (e.g. `--belt` or a gait file) against
+    /// [`Self::belt_speed_range_mps`]; the error names `what`, the value and the range.
+    pub fn check_belt_speed(&self, what: &str, speed_mps: f64) -> Result<()> {
+        let [lo, hi] = self.belt_speed_range_mps;
+        if speed_mps.is_finite() && lo <= speed_mps && speed_mps <= hi {
+            Ok(())
+        } else {
+            Err(RuntimeError::BeltSpeed {
+                what: what.to_string(),
+                speed_mps,
+                range_mps: self.belt_speed_range_mps,
+            })
+        }
+    }
+}
+
 /// The runtime config.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -307,6 +345,9 @@ pub struct RuntimeConfig {
     pub safety: SafetyConfig,
     /// Logging and telemetry.
     pub telemetry: TelemetryConfig,
+    /// The treadmill (absent: [`DEFAULT_BELT_SPEED_RANGE_MPS`]).
+    #[serde(default)]
+    pub treadmill: TreadmillConfig,
 }
 
 /// The URDF joint of each leg slot.
@@ -574,6 +615,14 @@ impl RuntimeConfig {
             "estimator.touchdown_pitch_sigma_rad",
             e.touchdown_pitch_sigma_rad,
         )?;
+        let [lo, hi] = self.treadmill.belt_speed_range_mps;
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(bad(
+                "treadmill.belt_speed_range_mps",
+                format!("[{lo}, {hi}]"),
+                "must be [lowest, highest] m/s, finite, lowest ≤ highest",
+            ));
+        }
         let s = &self.safety;
         for k in 0..LEG_SLOTS {
             finite(
@@ -691,6 +740,65 @@ mod tests {
         let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
         assert_eq!(c.leg_motors.len() + c.held.len(), 14);
         assert_eq!(c.loop_.rate_hz, 1000.0);
+    }
+
+    #[test]
+    fn belt_speeds_are_checked_against_the_treadmill_range_naming_who_asked() {
+        let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
+        assert_eq!(c.treadmill.belt_speed_range_mps, [0.0, 0.5]);
+        c.treadmill.check_belt_speed("--belt", 0.2).unwrap();
+        for bad in [-0.2, 5.0, f64::NAN] {
+            let e = c
+                .treadmill
+                .check_belt_speed("--belt", bad)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("--belt")
+                    && e.contains(&format!("{bad} m/s"))
+                    && e.contains("[0, 0.5] m/s"),
+                "{e}"
+            );
+        }
+        // Without a [treadmill] section: the default range; a reversed range is refused.
+        let without = shipped()
+            .replace("[treadmill]", "")
+            .replace("belt_speed_range_mps = [0.0, 0.5]", "");
+        let c = RuntimeConfig::from_toml(&without, "x.toml").unwrap();
+        assert_eq!(
+            c.treadmill.belt_speed_range_mps,
+            DEFAULT_BELT_SPEED_RANGE_MPS
+        );
+        let reversed = shipped().replace(
+            "belt_speed_range_mps = [0.0, 0.5]",
+            "belt_speed_range_mps = [0.5, 0.1]",
+        );
+        let e = RuntimeConfig::from_toml(&reversed, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("x.toml")
+                && e.contains("treadmill.belt_speed_range_mps")
+                && e.contains("[0.5, 0.1]"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn a_wrong_schema_version_is_named_in_words() {
+        let text = shipped().replace("schema_version = 1", "schema_version = 2");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`schema_version` = 2") && !e.contains("Some("),
+            "{e}"
+        );
+        let text = shipped().replace("schema_version = 1", "");
+        let e = RuntimeConfig::from_toml(&text, "x.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`schema_version` = (missing)"), "{e}");
     }
 
     #[test]

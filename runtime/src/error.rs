@@ -34,6 +34,21 @@ pub enum RuntimeError {
         /// Why it is refused.
         reason: String,
     },
+    /// A belt speed outside the treadmill's configured range.
+    #[error(
+        "{what} = {speed_mps} m/s is outside the treadmill's belt speed range [{}, {}] m/s \
+         (`[treadmill] belt_speed_range_mps` of the runtime config)",
+        range_mps[0],
+        range_mps[1]
+    )]
+    BeltSpeed {
+        /// Who asked for it: `--belt`, a gait file's speed, a fault profile's belt step.
+        what: String,
+        /// The speed asked for, m/s.
+        speed_mps: f64,
+        /// The treadmill's range, m/s.
+        range_mps: [f64; 2],
+    },
     /// The gait does not fit the robot model or the controller.
     #[error("gait does not fit: {reason}")]
     Gait {

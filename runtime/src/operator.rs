@@ -30,7 +30,7 @@ pub struct OperatorReceiver {
 
 /// The ring is full: the control loop is not consuming commands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("operator queue full, {command:?} not sent")]
+#[error("operator queue full, `{}` not sent", command.name())]
 pub struct QueueFull {
     /// The command that was not sent.
     pub command: OperatorCommand,
@@ -154,7 +154,7 @@ pub fn spawn_keyboard<R: std::io::BufRead + Send + 'static, H: CommandSink>(
                     }
                 }
                 None if line.trim().is_empty() => {}
-                None => eprintln!("operator: unknown key {:?} ({KEY_HELP})", line.trim()),
+                None => eprintln!("operator: unknown key `{}` ({KEY_HELP})", line.trim()),
             }
         }
     })
@@ -225,15 +225,16 @@ fn telemetry_error(service: &str, message: String) -> crate::RuntimeError {
 fn open_operator_service(name: &str) -> crate::Result<OperatorService> {
     use iceoryx2::prelude::*;
     let err = |m: String| telemetry_error(name, m);
-    let node = NodeBuilder::new()
-        .create::<ipc::Service>()
-        .map_err(|e| err(format!("node: {e:?}")))?;
-    let service_name: ServiceName = name.try_into().map_err(|e| err(format!("name: {e:?}")))?;
+    let node = crate::telemetry::sample::iceoryx2_node()
+        .map_err(|e| err(format!("cannot create a node: {e}")))?;
+    let service_name: ServiceName = name
+        .try_into()
+        .map_err(|e| err(format!("not a valid service name: {e}")))?;
     let service = node
         .service_builder(&service_name)
         .publish_subscribe::<OperatorMessage>()
         .open_or_create()
-        .map_err(|e| err(format!("service: {e:?}")))?;
+        .map_err(|e| err(format!("cannot open the service: {e}")))?;
     Ok((node, service))
 }
 
@@ -254,7 +255,7 @@ pub fn spawn_iceoryx2_forwarder<H: CommandSink>(
             let subscriber = service
                 .subscriber_builder()
                 .create()
-                .map_err(|e| telemetry_error(&name, format!("subscriber: {e:?}")))?;
+                .map_err(|e| telemetry_error(&name, format!("cannot create a subscriber: {e}")))?;
             Ok((node, service, subscriber))
         };
         let (node, service, subscriber) = match setup() {
@@ -307,12 +308,14 @@ pub fn send_over_iceoryx2(service: &str, command: OperatorCommand) -> crate::Res
     let publisher = port
         .publisher_builder()
         .create()
-        .map_err(|e| err(format!("publisher: {e:?}")))?;
+        .map_err(|e| err(format!("cannot create a publisher: {e}")))?;
     let sample = publisher
         .loan_uninit()
-        .map_err(|e| err(format!("loan: {e:?}")))?;
+        .map_err(|e| err(format!("cannot loan a sample: {e}")))?;
     let sample = sample.write_payload(OperatorMessage::new(command));
-    let receivers = sample.send().map_err(|e| err(format!("send: {e:?}")))?;
+    let receivers = sample
+        .send()
+        .map_err(|e| err(format!("cannot send: {e}")))?;
     // The sample lives in this publisher's shared memory: keep it alive for ten polling periods
     // of the runtime's forwarder (5 ms) so that it is read before this process lets go of it.
     std::thread::sleep(std::time::Duration::from_millis(50));

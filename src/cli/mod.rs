@@ -10,3 +10,4 @@ pub(crate) mod paths;
 pub(crate) mod plan;
 pub(crate) mod plots;
 pub(crate) mod run;
+pub(crate) mod shipped;

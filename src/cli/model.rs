@@ -1,6 +1,8 @@
 //! `adam model` and `adam generate-urdf`: a robot model's summary at a design, and ADAM's URDF
 //! for any design (GenerateModel).
 
+use crate::cli::paths::writable;
+use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use model::design::{generate_urdf, DesignLengths};
 use model::PlanarModel;
@@ -25,9 +27,12 @@ pub(crate) struct GenerateUrdfArgs {
     /// Shin length, m.
     #[arg(long, default_value_t = model::design::ADAM_SHIN_M)]
     shin: f64,
-    /// Output file (stdout if absent).
+    /// Output file (stdout if absent); an existing file needs --force.
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write over an existing --out.
+    #[arg(long, requires = "out")]
+    force: bool,
 }
 
 /// Parses `thigh=0.24,shin=0.25`.
@@ -62,7 +67,7 @@ fn parse_design(text: &str) -> Result<DesignLengths> {
 /// `adam model`: the model's summary, at a design if asked.
 pub(crate) fn show_model(args: &ModelArgs) -> Result<()> {
     let (urdf, design) = (&args.urdf, args.design.as_deref());
-    let robot = PlanarModel::from_urdf_file(urdf)?;
+    let robot = PlanarModel::from_urdf_file(shipped::input(urdf))?;
     let mut q = robot.nominal_pose()?;
     if let Some(text) = design {
         let d = parse_design(text)?;
@@ -91,7 +96,15 @@ pub(crate) fn show_model(args: &ModelArgs) -> Result<()> {
 
 /// `adam generate-urdf`: writes the URDF to `--out` or stdout.
 pub(crate) fn write_urdf(args: GenerateUrdfArgs) -> Result<()> {
-    let GenerateUrdfArgs { thigh, shin, out } = args;
+    let GenerateUrdfArgs {
+        thigh,
+        shin,
+        out,
+        force,
+    } = args;
+    if let Some(path) = &out {
+        writable(path, force)?;
+    }
     let text = generate_urdf(&DesignLengths {
         thigh_length_m: thigh,
         shin_length_m: shin,

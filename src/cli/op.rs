@@ -10,7 +10,7 @@ pub(crate) struct OpArgs {
     /// start, walk, stop, damp, reset or estop.
     command: String,
     /// Runtime config (its telemetry service name locates the runtime).
-    #[arg(long, default_value = "configs/runtime/adam.toml")]
+    #[arg(long, default_value = crate::cli::shipped::RUNTIME_CONFIG)]
     config: PathBuf,
 }
 
@@ -22,7 +22,7 @@ pub(crate) fn send(args: &OpArgs) -> Result<()> {
             "unknown operator command `{command}`: start, walk, stop, damp, reset or estop"
         )
     })?;
-    let cfg = runtime::config::RuntimeConfig::load(config)?;
+    let cfg = runtime::config::RuntimeConfig::load(crate::cli::shipped::input(config))?;
     let service = runtime::operator::operator_service_name(&cfg.telemetry.service_name);
     let receivers = runtime::operator::send_over_iceoryx2(&service, cmd)?;
     println!(

@@ -1,7 +1,31 @@
 //! File paths the commands derive: a gait file's reference to its URDF, output prefixes beside
-//! an input, and the demo's timestamped log.
+//! an input, the demo's timestamped log; and the rule every written file follows.
+//!
+//! **Never over what ships.** Generated gaits, URDFs and sweeps go under [`OUT_DIR`] (`out/`
+//! of the working directory, created if missing) unless the user names another path; a file
+//! that exists is written over only with `--force` ([`writable`]). The shipped files under
+//! `configs/` change only when a user names them and passes `--force`.
 
-use std::path::PathBuf;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+
+/// The default output folder of `adam plan`, `adam codesign` and `adam codesign sweep`.
+pub(crate) const OUT_DIR: &str = "out";
+
+/// Checks that `path` may be written: it does not exist, or `force` is set; then creates its
+/// folder. The error names the file and `--force`.
+pub(crate) fn writable(path: &Path, force: bool) -> Result<()> {
+    if path.exists() && !force {
+        bail!(
+            "{} exists: pass --force to write over it, or name another output",
+            path.display()
+        );
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    Ok(())
+}
 
 /// `target` as seen from the folder of `from` (for the gait file's robot reference).
 pub(crate) fn relative_path(target: &std::path::Path, from: &std::path::Path) -> String {

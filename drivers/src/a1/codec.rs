@@ -396,6 +396,38 @@ impl ErrorFlags {
     }
 }
 
+impl core::fmt::Display for ErrorFlags {
+    /// The faults in words (`over-temperature, encoder`), `none` when empty.
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let names = [
+            (Self::OVER_TEMPERATURE, "over-temperature"),
+            (Self::OVER_CURRENT, "over-current"),
+            (Self::BAD_VOLTAGE, "bad voltage"),
+            (Self::ENCODER, "encoder fault"),
+        ];
+        let mut first = true;
+        for (flag, name) in names {
+            if self.contains(flag) {
+                write!(f, "{}{name}", if first { "" } else { ", " })?;
+                first = false;
+            }
+        }
+        let unknown = self.0 & !0b1111;
+        if unknown != 0 {
+            write!(
+                f,
+                "{}unknown bits 0x{unknown:02x}",
+                if first { "" } else { ", " }
+            )?;
+            first = false;
+        }
+        if first {
+            f.write_str("none")?;
+        }
+        Ok(())
+    }
+}
+
 /// Motor → host reply (joint-side units).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reply {

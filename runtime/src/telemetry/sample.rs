@@ -180,6 +180,25 @@ impl StateSample {
     }
 }
 
+/// A node of this process, with iceoryx2's own logging quieted first (once).
+///
+/// iceoryx2 looks for its config file (`iceoryx2.toml`, see its docs) and, finding none, warns
+/// on stderr at every start that it uses its defaults: that is our normal case, not something a
+/// user must act on. Its log level is therefore set to `error` unless the environment variable
+/// `IOX2_LOG_LEVEL` asks for another (iceoryx2's own switch); a config file, if present, is
+/// still loaded.
+#[cfg(feature = "iceoryx2")]
+pub fn iceoryx2_node() -> std::result::Result<
+    iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+    iceoryx2::node::NodeCreationFailure,
+> {
+    static QUIET: std::sync::Once = std::sync::Once::new();
+    QUIET.call_once(|| {
+        iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error)
+    });
+    iceoryx2::prelude::NodeBuilder::new().create::<iceoryx2::prelude::ipc::Service>()
+}
+
 /// Publishes a [`StateSample`] every tick over iceoryx2 (zero-copy shared memory).
 ///
 /// iceoryx2 ports are not `Send`: create the publisher on the thread that uses it (the loop
@@ -207,19 +226,19 @@ impl Publisher {
             service: name.to_string(),
             message,
         };
-        let node = NodeBuilder::new()
-            .create::<ipc::Service>()
-            .map_err(|e| err(format!("node: {e:?}")))?;
-        let service_name: ServiceName = name.try_into().map_err(|e| err(format!("name: {e:?}")))?;
+        let node = iceoryx2_node().map_err(|e| err(format!("cannot create a node: {e}")))?;
+        let service_name: ServiceName = name
+            .try_into()
+            .map_err(|e| err(format!("not a valid service name: {e}")))?;
         let service = node
             .service_builder(&service_name)
             .publish_subscribe::<StateSample>()
             .open_or_create()
-            .map_err(|e| err(format!("service: {e:?}")))?;
+            .map_err(|e| err(format!("cannot open the service: {e}")))?;
         let publisher = service
             .publisher_builder()
             .create()
-            .map_err(|e| err(format!("publisher: {e:?}")))?;
+            .map_err(|e| err(format!("cannot create a publisher: {e}")))?;
         Ok(Self {
             publisher,
             _service: service,

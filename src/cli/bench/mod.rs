@@ -4,10 +4,11 @@
 mod report;
 
 use crate::cli::plan::PhaseSeconds;
+use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use model::PlanarModel;
 use report::{CheckRow, CheckSummary, PlanRow, PlanSummary};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The benchmarks of `adam bench`.
 #[derive(clap::Subcommand)]
@@ -45,6 +46,7 @@ pub(crate) fn check(runs: usize, gait_path: &std::path::Path) -> Result<()> {
     if runs == 0 {
         bail!("--runs must be at least 1");
     }
+    let gait_path = &shipped::input(gait_path);
     let (gait, robot) = planner::verify::load_gait_and_robot(gait_path)?;
     let options = planner::verify::VerifyOptions::default();
     println!("{}", CheckRow::header());
@@ -87,13 +89,14 @@ pub(crate) fn check(runs: usize, gait_path: &std::path::Path) -> Result<()> {
 /// `adam bench plan`: plans the gait `runs` times, one row per run, then the medians.
 pub(crate) fn plan(
     runs: usize,
-    robot: &PathBuf,
-    config: &PathBuf,
+    robot: &Path,
+    config: &Path,
     backend: Option<planner::config::SolverBackend>,
 ) -> Result<()> {
     if runs == 0 {
         bail!("--runs must be at least 1");
     }
+    let (robot, config) = (&shipped::input(robot), &shipped::input(config));
     let text =
         std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
     let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;

@@ -3,30 +3,35 @@
 
 mod report;
 
-use crate::cli::paths::relative_path;
+use crate::cli::paths::{relative_path, writable, OUT_DIR};
 use crate::cli::plan::{gait_check, progress_printer};
 use crate::cli::plots;
+use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use model::design::DesignLengths;
 use report::{CodesignReport, DesignRow, SweepCsv, SweepTable};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-/// Arguments of `adam codesign`.
+/// Arguments of `adam codesign`. `--config`, `--inertia` and `--force` are accepted before
+/// and after `sweep`.
 #[derive(clap::Args)]
 pub(crate) struct CodesignArgs {
-    /// Planner config (TOML) with its `[codesign]` section.
-    #[arg(long, default_value = "configs/planner/adam.toml")]
+    /// Planner config (TOML) with its `[codesign]` section (design box, sweep grid).
+    #[arg(long, global = true, default_value = "configs/planner/adam.toml")]
     config: PathBuf,
     /// Inertia coupling, overriding the config: `exact` (inside the NLP) or `alg1`
     /// (the paper's Alg. 1: frozen per solve, regenerated between solves).
-    #[arg(long, value_enum)]
+    #[arg(long, global = true, value_enum)]
     inertia: Option<InertiaArg>,
-    /// Output gait file.
-    #[arg(long, default_value = "configs/gaits/adam_codesign.json")]
-    out_gait: PathBuf,
-    /// Output URDF of the co-designed robot.
-    #[arg(long, default_value = "configs/robots/adam_codesign.urdf")]
-    out_urdf: PathBuf,
+    /// Write over existing output files.
+    #[arg(long, global = true)]
+    force: bool,
+    /// Output gait file (default: `out/gaits/adam_codesign.json`).
+    #[arg(long)]
+    out_gait: Option<PathBuf>,
+    /// Output URDF of the co-designed robot (default: `out/robots/adam_codesign.urdf`).
+    #[arg(long)]
+    out_urdf: Option<PathBuf>,
     /// `sweep`: the convergence study instead of one co-design.
     #[command(subcommand)]
     pub(crate) study: Option<CodesignStudy>,
@@ -36,15 +41,15 @@ pub(crate) struct CodesignArgs {
 #[derive(clap::Subcommand)]
 pub(crate) enum CodesignStudy {
     /// The paper's convergence study: co-design from an n × n grid of initial thigh and shin
-    /// lengths over the config's bounds, in parallel on all cores; writes sweep.csv, table.md
-    /// (like the paper's Table II) and convergence.png/.svg (like its Fig. 3).
+    /// lengths over the config's design box, in parallel on all cores; writes sweep.csv,
+    /// table.md (like the paper's Table II) and convergence.png/.svg (like its Fig. 3).
     Sweep {
-        /// Grid size n (n × n runs).
-        #[arg(long, default_value_t = 5)]
-        grid: usize,
-        /// Output folder.
-        #[arg(long, default_value = "logs/codesign-sweep")]
-        out_dir: PathBuf,
+        /// Grid size n (n × n runs), overriding the config's `[codesign.sweep] grid`.
+        #[arg(long)]
+        grid: Option<usize>,
+        /// Output folder (default: `out/codesign-sweep`).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
     },
 }
 
@@ -57,10 +62,10 @@ enum InertiaArg {
 
 /// The planner config with the CLI's inertia coupling, if given.
 fn codesign_config(
-    config: &PathBuf,
+    config: &Path,
     inertia: Option<InertiaArg>,
 ) -> Result<planner::config::PlannerConfig> {
-    let mut cfg = planner::config::PlannerConfig::load(config)?;
+    let mut cfg = planner::config::PlannerConfig::load(shipped::input(config))?;
     if let Some(i) = inertia {
         cfg.codesign.inertia = match i {
             InertiaArg::Exact => planner::config::InertiaCoupling::Exact,
@@ -76,16 +81,22 @@ pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
     let CodesignArgs {
         config,
         inertia,
+        force,
         out_gait,
         out_urdf,
         ..
     } = args;
-    let inertia = *inertia;
-    let cfg = codesign_config(config, inertia)?;
+    let out = Path::new(OUT_DIR);
+    let out_gait = &out_gait
+        .clone()
+        .unwrap_or_else(|| out.join("gaits/adam_codesign.json"));
+    let out_urdf = &out_urdf
+        .clone()
+        .unwrap_or_else(|| out.join("robots/adam_codesign.urdf"));
+    let cfg = codesign_config(config, *inertia)?;
+    // Refused before the solve, not after minutes of it.
     for path in [out_gait, out_urdf] {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        }
+        writable(path, *force)?;
     }
     let urdf_ref = relative_path(out_urdf, out_gait);
     let r = planner::codesign::codesign(&cfg, &urdf_ref, &mut progress_printer())?;
@@ -113,7 +124,7 @@ pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
         ("box corner", [c.thigh_m[0], c.shin_m[1]]),
         ("box corner", [c.thigh_m[1], c.shin_m[0]]),
         ("box corner", [c.thigh_m[1], c.shin_m[1]]),
-        ("paper's optimum", [0.2425, 0.2515]),
+        ("paper's optimum", PAPER_OPTIMUM_M),
     ];
     let designs: Vec<[f64; 2]> = fixed.iter().map(|f| f.1).collect();
     println!("\noptimizing the gait at fixed designs for comparison ...");
@@ -125,19 +136,48 @@ pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
     gait_check(out_gait, 10.0)
 }
 
-/// Relative cost of transport above the best run that marks a worse local minimum.
-const LOCAL_MINIMUM_MARGIN: f64 = 0.01;
+/// The paper's co-designed thigh and shin lengths, m (its Table II), a reference to compare with.
+const PAPER_OPTIMUM_M: [f64; 2] = [0.2425, 0.2515];
 
 /// `adam codesign sweep`: the convergence study; writes sweep.csv, table.md and the convergence
 /// figure, prints the table.
-pub(crate) fn convergence_sweep(args: &CodesignArgs, grid: usize, out_dir: &PathBuf) -> Result<()> {
+pub(crate) fn convergence_sweep(
+    args: &CodesignArgs,
+    grid: Option<usize>,
+    out_dir: Option<&Path>,
+) -> Result<()> {
     use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
     let (config, inertia) = (&args.config, args.inertia);
-    if !(1..=20).contains(&grid) {
-        bail!("--grid {grid}: must be in 1..=20");
+    for (flag, given) in [
+        ("--out-gait", args.out_gait.is_some()),
+        ("--out-urdf", args.out_urdf.is_some()),
+    ] {
+        if given {
+            bail!("{flag} is not used by `adam codesign sweep` (its outputs go to --out-dir)");
+        }
     }
-    let cfg = codesign_config(config, inertia)?;
-    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let mut cfg = codesign_config(config, inertia)?;
+    if let Some(grid) = grid {
+        if !(1..=planner::config::MAX_SWEEP_GRID).contains(&grid) {
+            bail!(
+                "--grid {grid}: must be in 1..={}",
+                planner::config::MAX_SWEEP_GRID
+            );
+        }
+        cfg.codesign.sweep.grid = grid;
+    }
+    let grid = cfg.codesign.sweep.grid;
+    let default_dir = Path::new(OUT_DIR).join("codesign-sweep");
+    let out_dir = out_dir.unwrap_or(&default_dir);
+    let outputs = [
+        "sweep.csv",
+        "table.md",
+        "convergence.png",
+        "convergence.svg",
+    ];
+    for name in outputs {
+        writable(&out_dir.join(name), args.force)?;
+    }
     let start = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
     let (model, urdf) = model::design::generate_model(&DesignLengths {
@@ -169,14 +209,16 @@ pub(crate) fn convergence_sweep(args: &CodesignArgs, grid: usize, out_dir: &Path
     });
     bar.finish();
     let wall_s = start.elapsed().as_secs_f64();
-    let minima = local_minima(&runs, LOCAL_MINIMUM_MARGIN);
+    let margin = cfg.codesign.sweep.local_minimum_margin;
+    let minima = local_minima(&runs, margin);
     // CSV of every run.
     let csv = SweepCsv {
         runs: &runs,
         local_minima: &minima,
     }
     .to_string();
-    std::fs::write(out_dir.join("sweep.csv"), csv)?;
+    let csv_path = out_dir.join("sweep.csv");
+    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
     // Table II: mean ± std over the runs that are not local minima.
     let good: Vec<&planner::codesign::SweepOutcome> = runs
         .iter()
@@ -210,12 +252,13 @@ pub(crate) fn convergence_sweep(args: &CodesignArgs, grid: usize, out_dir: &Path
         threads: rayon_threads(),
         converged: good.len(),
         local_minima: n_minima,
-        local_minimum_margin: LOCAL_MINIMUM_MARGIN,
+        local_minimum_margin: margin,
         failed,
         rows: &rows,
     }
     .to_string();
-    std::fs::write(out_dir.join("table.md"), &md)?;
+    let md_path = out_dir.join("table.md");
+    std::fs::write(&md_path, &md).with_context(|| format!("writing {}", md_path.display()))?;
     print!("\n{md}");
     let arrows: Vec<plots::ConvergenceArrow> = runs
         .iter()
@@ -232,7 +275,7 @@ pub(crate) fn convergence_sweep(args: &CodesignArgs, grid: usize, out_dir: &Path
         &out_dir.join("convergence"),
         &arrows,
         [cfg.codesign.thigh_m, cfg.codesign.shin_m],
-        (0.2425, 0.2515),
+        (PAPER_OPTIMUM_M[0], PAPER_OPTIMUM_M[1]),
     )?;
     println!(
         "\nwrote {0}/sweep.csv, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",

@@ -5,7 +5,8 @@ mod report;
 
 pub(crate) use report::{GaitFigures, PhaseSeconds};
 
-use crate::cli::paths::relative_path;
+use crate::cli::paths::{relative_path, writable};
+use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use model::PlanarModel;
 use report::{OrbitCheck, PlanSummary};
@@ -20,9 +21,12 @@ pub(crate) struct PlanArgs {
     /// Planner config (TOML).
     #[arg(long, default_value = "configs/planner/adam.toml")]
     config: PathBuf,
-    /// Output gait file (JSON).
-    #[arg(long, default_value = "configs/gaits/adam_walk.json")]
+    /// Output gait file (JSON); an existing file needs --force.
+    #[arg(long, default_value = "out/gaits/adam_walk.json")]
     out: PathBuf,
+    /// Write over an existing --out.
+    #[arg(long)]
+    force: bool,
     /// NLP backend, overriding the config's `[solver] backend`: `ripopt` or `native`.
     #[arg(long, value_parser = parse_backend)]
     backend: Option<planner::config::SolverBackend>,
@@ -78,9 +82,13 @@ pub(crate) fn plan(args: &PlanArgs) -> Result<()> {
         robot,
         config,
         out,
+        force,
         backend,
     } = args;
     let backend = *backend;
+    let (robot, config) = (&shipped::input(robot), &shipped::input(config));
+    // Refused before the solve, not after it.
+    writable(out, *force)?;
     let text =
         std::fs::read_to_string(robot).with_context(|| format!("reading {}", robot.display()))?;
     let model = PlanarModel::from_urdf_str(&text, &robot.display().to_string())?;
@@ -91,9 +99,6 @@ pub(crate) fn plan(args: &PlanArgs) -> Result<()> {
     let urdf_ref = relative_path(robot, out);
     let planned =
         planner::plan::plan_gait(&model, &urdf_ref, &text, &cfg, &mut progress_printer())?;
-    if let Some(dir) = out.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
     planned.gait.save(out)?;
     let g = &planned.gait;
     println!("\n{}", PlanSummary::of(&planned));
@@ -107,6 +112,7 @@ pub(crate) fn plan(args: &PlanArgs) -> Result<()> {
 
 /// `adam gait check`: prints the verification report; fails naming what failed.
 pub(crate) fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
+    let path = &shipped::input(path);
     let (gait, robot) = planner::verify::load_gait_and_robot(path)?;
     let options = planner::verify::VerifyOptions {
         epsilon_per_s: epsilon,

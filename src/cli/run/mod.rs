@@ -3,7 +3,8 @@
 
 mod report;
 
-use crate::cli::paths::timestamped_log_path;
+use crate::cli::paths::{timestamped_log_path, writable};
+use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use report::{LogCounts, RobotRunReport};
 use std::path::PathBuf;
@@ -18,20 +19,24 @@ pub(crate) struct RunArgs {
     #[arg(long, default_value = runtime::DEFAULT_GAIT)]
     gait: PathBuf,
     /// Runtime config (TOML).
-    #[arg(long, default_value = "configs/runtime/adam.toml")]
+    #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
     config: PathBuf,
-    /// Run time, e.g. `30s`, `1500ms` or `30` (seconds).
+    /// Run time, e.g. `30s`, `1500ms` or `30` (seconds); more than 0, at most 24 h.
     #[arg(long, default_value = "30s", value_parser = parse_duration_s)]
     duration: f64,
-    /// Treadmill belt speed, m/s (sim; default: the gait's speed).
-    #[arg(long)]
+    /// Treadmill belt speed, m/s, inside the config's `[treadmill] belt_speed_range_mps`
+    /// (sim; default: the gait's speed).
+    #[arg(long, allow_negative_numbers = true)]
     belt: Option<f64>,
-    /// MCAP log file (sim; default: no log).
+    /// MCAP log file (sim; default: no log); an existing file needs --force.
     #[arg(long)]
     log: Option<PathBuf>,
-    /// Seed of the simulated IMU and encoder noise (sim).
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    /// Write the --log over an existing file.
+    #[arg(long)]
+    force: bool,
+    /// Seed of the simulated IMU and encoder noise (sim; default 1).
+    #[arg(long)]
+    seed: Option<u64>,
     /// Pace the simulated run by the wall clock at the loop rate and report the loop's
     /// wake-up jitter (sim; default: as fast as the CPU allows). A wall-clock run listens
     /// for operator commands over iceoryx2 (`adam op`).
@@ -53,8 +58,8 @@ pub(crate) struct RunArgs {
 /// Arguments of `adam soak`.
 #[derive(clap::Args)]
 pub(crate) struct SoakArgs {
-    /// Simulated minutes to walk (fractions allowed).
-    #[arg(long)]
+    /// Simulated minutes to walk (fractions allowed; more than 0, at most 24 h).
+    #[arg(long, value_parser = parse_minutes)]
     minutes: f64,
     /// Fault profile: none, loss-0.1, loss-1, loss-10, corrupt-1, delay-1, soak, rough,
     /// or a TOML file.
@@ -70,9 +75,12 @@ pub(crate) struct SoakArgs {
     #[arg(long, default_value = runtime::DEFAULT_GAIT)]
     gait: PathBuf,
     /// Runtime config (TOML).
-    #[arg(long, default_value = "configs/runtime/adam.toml")]
+    #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
     config: PathBuf,
 }
+
+/// The longest run or soak accepted, s (a day).
+const MAX_DURATION_S: f64 = 86_400.0;
 
 /// Backend of `adam run`.
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -83,7 +91,7 @@ enum Backend {
     Can,
 }
 
-/// Parses `30s`, `1500ms` or `30` into seconds.
+/// Parses `30s`, `1500ms` or `30` into seconds, more than 0 and at most a day.
 fn parse_duration_s(text: &str) -> Result<f64, String> {
     let t = text.trim();
     let (number, scale) = if let Some(ms) = t.strip_suffix("ms") {
@@ -101,7 +109,89 @@ fn parse_duration_s(text: &str) -> Result<f64, String> {
     if !(seconds.is_finite() && seconds > 0.0) {
         return Err(format!("'{text}': the duration must be positive"));
     }
+    if seconds > MAX_DURATION_S {
+        return Err(format!(
+            "'{text}': the duration must be at most 24 h ({MAX_DURATION_S} s)"
+        ));
+    }
     Ok(seconds)
+}
+
+/// Parses `--minutes`: more than 0, at most a day.
+fn parse_minutes(text: &str) -> Result<f64, String> {
+    let minutes: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("'{text}' is not a number of minutes"))?;
+    if !(minutes.is_finite() && minutes > 0.0 && minutes * 60.0 <= MAX_DURATION_S) {
+        return Err(format!(
+            "'{text}': the minutes must be more than 0 and at most 1440 (24 h)"
+        ));
+    }
+    Ok(minutes)
+}
+
+/// The flags of `adam run` given that `backend` does not use, as they are written.
+fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
+    let given = |flag: &'static str, set: bool| set.then_some(flag);
+    match backend {
+        Backend::Sim => [given("--can-interfaces", args.can_interfaces.is_some())]
+            .into_iter()
+            .flatten()
+            .collect(),
+        Backend::Can => [
+            given("--belt", args.belt.is_some()),
+            given("--log", args.log.is_some()),
+            given("--force", args.force),
+            given("--seed", args.seed.is_some()),
+            given("--real-time", args.real_time),
+            given("--keyboard", args.keyboard),
+            given("--faults", args.faults.is_some()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
+    }
+}
+
+/// Checks every speed a simulated run asks of the treadmill: the gait's walking speed (the
+/// belt's default), `--belt` and each belt step of the fault profile.
+fn check_belt_speeds(
+    setup: &runtime::Setup,
+    gait: &std::path::Path,
+    belt: Option<f64>,
+    faults: Option<(&str, &runtime::sim::faults::FaultProfile)>,
+) -> Result<()> {
+    use runtime::sim::faults::Fault;
+    let treadmill = &setup.config.treadmill;
+    // The gait's speed is the belt's default, and the speed a walk on the lab's treadmill needs.
+    treadmill.check_belt_speed(
+        &format!(
+            "the walking speed of {} (field `speed_mps`)",
+            gait.display()
+        ),
+        setup.gait.speed_mps,
+    )?;
+    if let Some(v) = belt {
+        treadmill.check_belt_speed("--belt", v)?;
+    }
+    if let Some((name, profile)) = faults {
+        let events = profile.events.iter().map(|e| e.fault);
+        let random = profile
+            .random
+            .iter()
+            .flat_map(|r| r.faults.iter())
+            .map(|f| f.fault);
+        for fault in events.chain(random) {
+            if let Fault::BeltSpeed { speed_mps } = fault {
+                treadmill.check_belt_speed(
+                    &format!("a belt_speed fault of profile `{name}` (field `speed_mps`)"),
+                    speed_mps,
+                )?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// A wall-clock simulated run that takes operator commands over iceoryx2 and, if asked, from
@@ -159,9 +249,10 @@ fn sim_walk(setup: &runtime::Setup, options: &runtime::sim::run::SimWalkOptions)
 
 /// `adam demo`: the shipped gait, 30 s on the simulated treadmill, logged under `logs/`.
 pub(crate) fn demo() -> Result<()> {
-    let gait = PathBuf::from(runtime::DEFAULT_GAIT);
-    let config = PathBuf::from("configs/runtime/adam.toml");
+    let gait = shipped::input(std::path::Path::new(runtime::DEFAULT_GAIT));
+    let config = shipped::input(std::path::Path::new(shipped::RUNTIME_CONFIG));
     let setup = runtime::Setup::load(&config, &gait)?;
+    check_belt_speeds(&setup, &gait, None, None)?;
     let g = &setup.gait;
     println!(
         "adam demo: {} (step {:.4} m, {:.4} s, {:.4} m/s) with {}, 30 s on the simulated treadmill via SimBus (A1 CAN codec)",
@@ -178,6 +269,19 @@ pub(crate) fn demo() -> Result<()> {
 
 /// `adam run`: walks on the chosen backend and prints its report.
 pub(crate) fn run(args: RunArgs) -> Result<()> {
+    let unused = unused_flags(args.backend, &args);
+    if !unused.is_empty() {
+        let (backend, other) = match args.backend {
+            Backend::Sim => ("sim", "can"),
+            Backend::Can => ("can", "sim"),
+        };
+        bail!(
+            "{} {} not used by --backend {backend} (only by --backend {other}): remove {}",
+            unused.join(", "),
+            if unused.len() == 1 { "is" } else { "are" },
+            if unused.len() == 1 { "it" } else { "them" },
+        );
+    }
     let RunArgs {
         backend,
         gait,
@@ -185,27 +289,39 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         duration,
         belt,
         log,
+        force,
         seed,
         real_time,
         keyboard,
         can_interfaces,
         faults,
     } = args;
+    let (gait, config) = (shipped::input(&gait), shipped::input(&config));
     let setup = runtime::Setup::load(&config, &gait)?;
-    if faults.is_some() && matches!(backend, Backend::Can) {
-        bail!("--faults injects faults into the simulated backend only");
-    }
     match backend {
         Backend::Sim => {
+            let faults = faults
+                .as_deref()
+                .map(|f| {
+                    runtime::sim::faults::FaultProfile::resolve(&shipped::fault_profile(f))
+                        .map(|p| (f, p))
+                })
+                .transpose()?;
+            check_belt_speeds(
+                &setup,
+                &gait,
+                belt,
+                faults.as_ref().map(|(name, p)| (*name, p)),
+            )?;
+            if let Some(path) = &log {
+                writable(path, force)?;
+            }
             let mut options = runtime::sim::run::SimWalkOptions::new(duration);
             options.belt_speed_mps = belt;
             options.log_path = log;
-            options.seed = seed;
+            options.seed = seed.unwrap_or(1);
             options.real_time = real_time;
-            options.faults = faults
-                .as_deref()
-                .map(runtime::sim::faults::FaultProfile::resolve)
-                .transpose()?;
+            options.faults = faults.map(|(_, p)| p);
             if real_time {
                 sim_walk_operated(&setup, &options, keyboard)
             } else {
@@ -232,9 +348,11 @@ pub(crate) fn soak(args: SoakArgs) -> Result<()> {
         gait,
         config,
     } = args;
-    let (faults, config, gait) = (faults.as_str(), config.as_path(), gait.as_path());
-    let profile = runtime::sim::faults::FaultProfile::resolve(faults)?;
-    let setup = runtime::Setup::load(config, gait)?;
+    let (config, gait) = (shipped::input(&config), shipped::input(&gait));
+    let faults = faults.as_str();
+    let profile = runtime::sim::faults::FaultProfile::resolve(&shipped::fault_profile(faults))?;
+    let setup = runtime::Setup::load(&config, &gait)?;
+    check_belt_speeds(&setup, &gait, None, Some((faults, &profile)))?;
     let options = runtime::sim::run::SoakOptions {
         duration_s: minutes * 60.0,
         profile,
