@@ -100,17 +100,23 @@ pub(crate) fn json_error(text: &str, origin: &str, e: &serde_json::Error) -> Mod
     let string_non_number = ["\"NaN\"", "\"nan\"", "\"inf\"", "\"Infinity\""]
         .iter()
         .any(|w| message.contains(w));
-    let hint = if bare_non_number || string_non_number {
-        " (JSON has no NaN or infinity, and numbers are not quoted: write a finite number)"
+    let hint = if bare_non_number {
+        let word: String = near
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '-')
+            .collect();
+        format!(", found {word} (JSON has no NaN or infinity: write a finite number)")
+    } else if string_non_number {
+        " (JSON has no NaN or infinity, and numbers are not quoted: write a finite number)".into()
     } else {
-        ""
+        String::new()
     };
     ModelError::Json {
         origin: origin.to_string(),
         line,
         column,
         field,
-        message: message + hint,
+        message: message + &hint,
     }
 }
 
