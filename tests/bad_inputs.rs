@@ -153,6 +153,9 @@ fn check(kind: &str, path: &Path) -> Vec<String> {
         match result {
             Err(why) => failures.push(format!("{kind}/{file_name}: {why}")),
             Ok(message) => {
+                if std::env::var_os("BAD_INPUTS_SHOW").is_some() {
+                    println!("{kind}/{file_name}:\n    {message}");
+                }
                 let mut missing: Vec<&str> = words
                     .iter()
                     .map(String::as_str)

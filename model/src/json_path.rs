@@ -91,7 +91,12 @@ pub(crate) fn json_error(text: &str, origin: &str, e: &serde_json::Error) -> Mod
         .unwrap_or(&full)
         .to_string();
     let offset = offset_of(text, line, column);
-    let field = path_at(text, offset);
+    let mut field = path_at(text, offset);
+    // A missing field is reported at the object's closing brace, after its last key: the
+    // object's own path is the one to name.
+    if message.starts_with("missing field") {
+        field = path_at(text, offset.saturating_add(1));
+    }
     let near = text.get(offset.saturating_sub(1)..).unwrap_or("");
     let near = near.trim_start_matches(|c: char| c == ':' || c.is_whitespace());
     let bare_non_number = ["NaN", "nan", "Infinity", "-Infinity", "inf", "-inf"]
@@ -100,17 +105,23 @@ pub(crate) fn json_error(text: &str, origin: &str, e: &serde_json::Error) -> Mod
     let string_non_number = ["\"NaN\"", "\"nan\"", "\"inf\"", "\"Infinity\""]
         .iter()
         .any(|w| message.contains(w));
-    let hint = if bare_non_number || string_non_number {
-        " (JSON has no NaN or infinity, and numbers are not quoted: write a finite number)"
+    let hint = if bare_non_number {
+        let word: String = near
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '-')
+            .collect();
+        format!(", found {word} (JSON has no NaN or infinity: write a finite number)")
+    } else if string_non_number {
+        " (JSON has no NaN or infinity, and numbers are not quoted: write a finite number)".into()
     } else {
-        ""
+        String::new()
     };
     ModelError::Json {
         origin: origin.to_string(),
         line,
         column,
         field,
-        message: message + hint,
+        message: message + &hint,
     }
 }
 

@@ -99,6 +99,9 @@ fn nan_is_refused_with_the_field() {
             field: Field::Kp
         })
     );
+    // Named as in `Command`, not in Rust's Debug form (issue #27).
+    let message = encode_command(&c).unwrap_err().to_string();
+    assert_eq!(message, "motor 2: field kp_nm_per_rad is NaN");
 }
 
 #[test]
