@@ -152,6 +152,27 @@ pub struct TrackingStats {
     pub pitch_max_abs_rad: f64,
 }
 
+/// `tracking RMS: hip … knee … (stance hip …, …) over N walk ticks`, in degrees, or `tracking
+/// RMS: no walk ticks`.
+impl std::fmt::Display for TrackingStats {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.walk_ticks == 0 {
+            return f.write_str("tracking RMS: no walk ticks");
+        }
+        write!(
+            f,
+            "tracking RMS: hip {:.3}° knee {:.3}° (stance hip {:.3}°, stance knee {:.3}°, swing hip {:.3}°, swing knee {:.3}°) over {} walk ticks",
+            self.hip_rms_deg(),
+            self.knee_rms_deg(),
+            self.rms_rad(0).to_degrees(),
+            self.rms_rad(1).to_degrees(),
+            self.rms_rad(2).to_degrees(),
+            self.rms_rad(3).to_degrees(),
+            self.walk_ticks
+        )
+    }
+}
+
 impl TrackingStats {
     fn add(&mut self, status: &crate::control::Status) {
         self.walk_ticks += 1;

@@ -530,17 +530,7 @@ impl std::fmt::Display for SimWalkReport {
             self.drift_m
         )?;
         let t = &s.tracking;
-        writeln!(
-            f,
-            "tracking RMS: hip {:.3}° knee {:.3}° (stance hip {:.3}°, stance knee {:.3}°, swing hip {:.3}°, swing knee {:.3}°) over {} walk ticks",
-            t.hip_rms_deg(),
-            t.knee_rms_deg(),
-            t.rms_rad(0).to_degrees(),
-            t.rms_rad(1).to_degrees(),
-            t.rms_rad(2).to_degrees(),
-            t.rms_rad(3).to_degrees(),
-            t.walk_ticks
-        )?;
+        writeln!(f, "{t}")?;
         let trip = s.trip.map_or_else(|| "none".to_string(), |t| t.to_string());
         let fall = self
             .fall

@@ -131,22 +131,7 @@ impl fmt::Display for RobotRunReport {
                 .collect();
             writeln!(f, "state changes: {}", changes.join(", "))?;
         }
-        let t = &self.tracking;
-        if t.walk_ticks > 0 {
-            writeln!(
-                f,
-                "tracking RMS: hip {:.3}° knee {:.3}° (stance hip {:.3}°, stance knee {:.3}°, swing hip {:.3}°, swing knee {:.3}°) over {} walk ticks",
-                t.hip_rms_deg(),
-                t.knee_rms_deg(),
-                t.rms_rad(0).to_degrees(),
-                t.rms_rad(1).to_degrees(),
-                t.rms_rad(2).to_degrees(),
-                t.rms_rad(3).to_degrees(),
-                t.walk_ticks
-            )?;
-        } else {
-            writeln!(f, "tracking RMS: no walk ticks")?;
-        }
+        writeln!(f, "{}", self.tracking)?;
         match self.trip {
             Some(trip) => writeln!(f, "safety trip: {}", trip)?,
             None => writeln!(f, "safety trips: none")?,
