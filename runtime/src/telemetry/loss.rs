@@ -132,7 +132,10 @@ impl Loss {
         let place = match (self.cut_off, first) {
             (true, None) => format!("cut off at byte {} (no footer)", self.file_bytes),
             (true, Some(d)) if d.end == self.file_bytes && self.damage.len() == 1 => {
-                format!("cut off at byte {} ({})", d.start, d.reason)
+                format!(
+                    "cut off at byte {} ({}, from byte {})",
+                    self.file_bytes, d.reason, d.start
+                )
             }
             (_, Some(d)) => format!(
                 "damaged at {} ({}: bytes {}–{})",

@@ -6,13 +6,15 @@
 //!                                                   └─ bad or cut off ─▶ scan forward for the next
 //!            position where a chunk or attachment whose CRC holds starts (or a run of records
 //!            that leads to one, or to the footer): the bytes in between are damage
-//! kept chunks ─▶ messages in file order ([`Salvaged::messages`])
-//! summary chunk indexes + message indexes + chunk headers ─▶ what the damage held ([`Loss`])
+//! kept chunks ─▶ messages in file order (Salvaged::messages)
+//! summary chunk indexes + message indexes + chunk headers ─▶ what the damage held (Loss)
+//! data and summary CRCs ─▶ damage to records that still parse
 //! ```
 //! Schemas and channels are taken from wherever they survive (before the damage, inside kept
 //! chunks, or in the summary), so the messages of every kept chunk decode. A damaged length
-//! field never makes a reader allocate what it claims: lengths are checked against the file and
-//! chunk sizes against [`size_limit`] before anything is decompressed.
+//! field never makes a reader allocate what it claims: lengths are checked against the file,
+//! chunk sizes against 64 × the file (at least 256 MiB), and the records inside a chunk against
+//! the chunk's own sizes. What was lost is a [`Loss`].
 
 use crate::telemetry::log::{LOG_SCHEMA_VERSION, SCHEMA_VERSION_KEY};
 use crate::telemetry::loss::{Damage, Loss, LostChunk};
