@@ -619,7 +619,15 @@ impl<'a> Salvaged<'a> {
             let Ok(offset) = usize::try_from(ci.chunk_start_offset) else {
                 continue;
             };
-            if pass.kept_chunk_offsets.contains(&offset) {
+            // A damaged summary can name offsets where no chunk ever was: trust an index only
+            // where a chunk starts or damage hides what started there.
+            let in_damage = pass
+                .damage
+                .iter()
+                .any(|d| (d.start..d.end).contains(&(offset as u64)));
+            if pass.kept_chunk_offsets.contains(&offset)
+                || !(in_damage || bytes.get(offset) == Some(&OP_CHUNK))
+            {
                 continue;
             }
             let messages: Option<BTreeMap<u16, u64>> = ci
