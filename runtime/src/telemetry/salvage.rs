@@ -59,7 +59,6 @@ pub fn check_schema_version(path: &Path, channel: &mcap::Channel<'_>) -> Result<
 /// MCAP's magic, at the start and at the end of a file.
 pub(crate) const MAGIC: &[u8] = b"\x89MCAP0\r\n";
 
-const OP_HEADER: u8 = 0x01;
 const OP_FOOTER: u8 = 0x02;
 const OP_CHUNK: u8 = 0x06;
 const OP_ATTACHMENT: u8 = 0x09;
@@ -512,7 +511,7 @@ impl<'a> Salvaged<'a> {
                 Read::Bad(reason) => {
                     let op = bytes[pos];
                     let what = match op {
-                        OP_HEADER if pos == 8 => "the header",
+                        _ if pos == MAGIC.len() => "the header",
                         OP_CHUNK => "a chunk",
                         OP_ATTACHMENT => "an attachment",
                         OP_FOOTER => "the footer",
