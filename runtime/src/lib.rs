@@ -15,7 +15,7 @@
 //! | [`operator`] | operator commands into the loop: SPSC ring + latching e-stop flag, never blocks |
 //! | [`backend`] | what the loop runs on: [`backend::Backend`] = [`drivers::bus::MotorBus`] + [`drivers::imu::Imu`]; [`backend::WithImu`] (pair a bus with an IMU) |
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
-//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info\|recover`, joint series); deterministic [`telemetry::replay`] (`adam replay`, fixtures) |
+//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
 //! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]) |

@@ -16,7 +16,8 @@
 use crate::control::ControlState;
 use crate::slots::SlotLayout;
 use crate::telemetry::log::CHANNELS;
-use crate::telemetry::log_read::{check_schema_version, log_err, read_bytes, top_level};
+use crate::telemetry::log_read::{check_schema_version, log_err, read_bytes, TopLevel};
+use crate::telemetry::salvage::Salvaged;
 use crate::Result;
 use model::Side;
 use serde_json::Value;
@@ -58,6 +59,9 @@ pub struct GaitTiles {
     pub step_length_m: f64,
     /// The figures, by increasing phase.
     pub figures: Vec<StickFigure>,
+    /// Where the log is cut off or damaged and what was lost (`None`: read whole); the step
+    /// drawn is one of the intact part.
+    pub damage: Option<String>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -107,7 +111,8 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
         ));
     }
     let bytes = read_bytes(path)?;
-    let setup = top_level(path, &bytes)?.setup(path)?;
+    let log = Salvaged::read(path, &bytes)?;
+    let setup = TopLevel::of(&log).setup(path)?;
     let names: Vec<&str> = setup
         .config
         .leg_motors
@@ -123,13 +128,9 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
 
     // Rows by log time (every channel of a tick shares it).
     let mut rows: BTreeMap<u64, Row> = BTreeMap::new();
-    let stream =
-        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(|e| log_err(path, e))?;
     let mut checked = Vec::new();
-    for message in stream {
-        // A cut-off log: use what was read.
-        let Ok(m) = message else { break };
+    // A cut-off or damaged log: every message of its intact chunks.
+    for m in log.messages() {
         let topic = m.channel.topic.as_str();
         if ![CHANNELS[0], CHANNELS[1], CHANNELS[2], CHANNELS[3]].contains(&topic) {
             continue;
@@ -269,5 +270,6 @@ pub fn gait_tiles(path: impl AsRef<Path>, count: usize) -> Result<GaitTiles> {
         step_duration_s: end.t_s - step_rows[0].t_s,
         step_length_m: last.swing_leg_m[2][0],
         figures,
+        damage: log.loss.summary(),
     })
 }

@@ -1,5 +1,6 @@
-//! `adam logs`, `adam replay` and `adam plot`: what a run log holds, a cut-off log recovered,
-//! a log replayed through this build's controller, and figures drawn from logs.
+//! `adam logs`, `adam replay` and `adam plot`: what a run log holds, a cut-off or damaged log
+//! recovered, a log replayed through this build's controller, and figures drawn from logs.
+//! Every command reads a damaged log past its damage and warns (on stderr) what it lost.
 
 use crate::cli::paths::with_suffix;
 use crate::cli::plots;
@@ -25,10 +26,10 @@ pub(crate) enum LogsCommand {
         /// The log.
         log: PathBuf,
     },
-    /// Rewrite a log cut off by a crash with summary and indexes: every message up to the last
-    /// complete chunk.
+    /// Rewrite a log cut off by a crash or damaged with summary and indexes: every message of
+    /// every chunk whose CRC holds, and an account of what was lost.
     Recover {
-        /// The cut-off log.
+        /// The cut-off or damaged log.
         log: PathBuf,
         /// Output (default: `<log stem>.recovered.mcap` beside the input).
         #[arg(long)]
@@ -80,6 +81,13 @@ pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
     for log in logs {
         let report = runtime::telemetry::replay::replay(log)?;
         print!("{report}");
+        if let Some(t) = &report.truncated {
+            eprintln!(
+                "warning: {}: {t}; replay checked ticks 0–{}",
+                log.display(),
+                report.ticks.saturating_sub(1)
+            );
+        }
         diverged += usize::from(report.divergence.is_some());
     }
     if diverged > 0 {
@@ -90,7 +98,11 @@ pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
 
 /// `adam logs info`: channels, counts, drops, trips, gait and design of a log.
 pub(crate) fn info(log: &std::path::Path) -> Result<()> {
-    print!("{}", runtime::telemetry::log_read::read_info(log)?);
+    let info = runtime::telemetry::log_read::read_info(log)?;
+    print!("{info}");
+    if let Some(t) = &info.truncated {
+        eprintln!("warning: {}: {t}", log.display());
+    }
     Ok(())
 }
 
@@ -98,19 +110,7 @@ pub(crate) fn info(log: &std::path::Path) -> Result<()> {
 pub(crate) fn recover(log: PathBuf, out: Option<PathBuf>) -> Result<()> {
     let out = out.unwrap_or_else(|| log.with_extension("recovered.mcap"));
     let stats = runtime::telemetry::log_read::recover(&log, &out)?;
-    println!(
-        "{} -> {}: {} messages, {} attachments, {} metadata records{}",
-        log.display(),
-        out.display(),
-        stats.messages,
-        stats.attachments,
-        stats.metadata,
-        if stats.input_complete {
-            " (the input was complete already)"
-        } else {
-            ""
-        }
-    );
+    print!("{stats}");
     Ok(())
 }
 
@@ -121,6 +121,15 @@ pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathB
         .as_ref()
         .map(|p| runtime::telemetry::log_read::joint_series(p))
         .transpose()?;
+    for (path, series) in std::iter::once((&log, &a)).chain(compare.iter().zip(&b)) {
+        if let Some(d) = &series.damage {
+            eprintln!(
+                "warning: {}: {d}; drawing the {} samples read",
+                path.display(),
+                series.t_s.len()
+            );
+        }
+    }
     let mut runs = vec![plots::PortraitRun {
         label: log.display().to_string(),
         series: &a,
@@ -144,6 +153,12 @@ pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathB
 /// `adam plot tiles`: stick figures of one step of a logged walk.
 pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>) -> Result<()> {
     let tiles = runtime::tiles::gait_tiles(&log, count)?;
+    if let Some(d) = &tiles.damage {
+        eprintln!(
+            "warning: {}: {d}; drawing a step of what was read",
+            log.display()
+        );
+    }
     let prefix = out.unwrap_or_else(|| with_suffix(&log, "-tiles"));
     let name = log
         .file_name()

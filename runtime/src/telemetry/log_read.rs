@@ -1,25 +1,31 @@
-//! Reading our MCAP logs back: `adam logs info` and `adam logs recover`.
+//! Reading our MCAP logs back: `adam logs info`, and the joint series of `adam plot portrait`.
 //!
 //! ```text
-//! file bytes ──▶ LinearReader (IgnoreEndMagic) ──▶ metadata, attachments (top level)
-//!            └─▶ MessageStream (IgnoreEndMagic) ──▶ messages, chunk by chunk
-//!                      │ first error (a chunk cut off by a crash) = end of the readable log
-//!                      ▼
-//!              LogInfo (channels, counts, time span, drops, safety trips, gait, design)
-//!              recover(): the same records rewritten with summary and indexes
+//! file bytes ──▶ salvage (every whole record; damage stepped over and accounted for)
+//!                  ├─▶ metadata, attachments (top level)
+//!                  └─▶ messages of every kept chunk, in file order
+//!                        ▼
+//!              LogInfo (channels, counts, time span, drops, safety trips, gait, design,
+//!                       and what a damaged or cut-off log lost)
 //! ```
-//! Both passes stop at the first record they cannot parse, so a log cut off by SIGKILL still
-//! yields every message up to its last complete chunk. Every channel must carry
-//! [`LOG_SCHEMA_VERSION`] in its `adam_log_schema` metadata; any other (or none) is an error
-//! naming the channel, never a silent misread.
+//! Every reader ([`read_info`], [`joint_series`], [`crate::telemetry::replay`], [`crate::tiles`])
+//! reads the same way: a log cut off by SIGKILL or damaged in the middle yields every message of
+//! every intact chunk, and says what it could not read ([`crate::telemetry::salvage`]);
+//! `adam logs recover` ([`crate::telemetry::recover`]) rewrites such a log whole. Every channel
+//! must carry [`crate::telemetry::log::LOG_SCHEMA_VERSION`] in its `adam_log_schema` metadata;
+//! any other (or none) is an error naming the channel, never a silent misread.
 //!
 //! ```no_run
 //! let info = runtime::telemetry::log_read::read_info("logs/run.mcap").unwrap();
 //! println!("{info}");
 //! ```
 
-use crate::telemetry::log::{CHANNELS, LOG_SCHEMA_VERSION, SCHEMA_VERSION_KEY};
-use crate::{Result, RuntimeError};
+use crate::telemetry::log::CHANNELS;
+pub use crate::telemetry::recover::{recover, RecoverStats};
+pub use crate::telemetry::salvage::check_schema_version;
+use crate::telemetry::salvage::Salvaged;
+pub(crate) use crate::telemetry::salvage::{log_err, read_bytes};
+use crate::Result;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -50,8 +56,8 @@ pub struct LogInfo {
     pub path: PathBuf,
     /// File size, bytes.
     pub file_bytes: u64,
-    /// `None` when the file was read to its footer; otherwise why reading stopped early
-    /// (a cut-off log: `adam logs recover` rewrites it).
+    /// `None` when the file was read whole to its footer; otherwise where it is cut off or
+    /// damaged, how much was read and what was lost (`adam logs recover` rewrites it).
     pub truncated: Option<String>,
     /// Channels in order of first appearance.
     pub channels: Vec<ChannelInfo>,
@@ -102,10 +108,17 @@ impl std::fmt::Display for LogInfo {
         )?;
         match &self.truncated {
             None => writeln!(f, "complete  yes (footer read)")?,
-            Some(why) => writeln!(
+            Some(why) => writeln!(f, "complete  NO: {why}; `adam logs recover` rewrites it")?,
+        }
+        if let Some(r) = self.metadata.get("recovery") {
+            writeln!(
                 f,
-                "complete  NO: cut off ({why}); `adam logs recover` rewrites it"
-            )?,
+                "recovered from {}: {}",
+                r.get("source").map_or("?", String::as_str),
+                r.get("summary")
+                    .or_else(|| r.get("stopped"))
+                    .map_or("?", String::as_str)
+            )?;
         }
         writeln!(f, "duration  {:.3} s", self.duration_s())?;
         match self.dropped() {
@@ -152,50 +165,12 @@ impl std::fmt::Display for LogInfo {
     }
 }
 
-pub(crate) fn log_err(path: &Path, e: impl std::fmt::Display) -> RuntimeError {
-    RuntimeError::Log {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    }
-}
-
-/// MCAP's leading magic bytes.
-const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
-
-/// The file's bytes; a file that does not even start like an MCAP file is an error (a cut-off
-/// log still has its leading magic).
-pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>> {
-    let bytes = std::fs::read(path).map_err(|error| RuntimeError::Io {
-        path: path.to_path_buf(),
-        error,
-    })?;
-    if !bytes.starts_with(MCAP_MAGIC) {
-        return Err(log_err(path, "not an MCAP file (no leading MCAP magic)"));
-    }
-    crate::telemetry::log_guard::check_lengths(path, &bytes)?;
-    Ok(bytes)
-}
-
-/// Refuse a channel of another log schema version (or an unversioned one).
-pub fn check_schema_version(path: &Path, channel: &mcap::Channel<'_>) -> Result<()> {
-    let found = channel.metadata.get(SCHEMA_VERSION_KEY);
-    if found.map(String::as_str) == Some(LOG_SCHEMA_VERSION.to_string().as_str()) {
-        return Ok(());
-    }
-    Err(RuntimeError::LogSchemaVersion {
-        path: path.to_path_buf(),
-        channel: channel.topic.clone(),
-        found: found.cloned().unwrap_or_else(|| "none".into()),
-        expected: LOG_SCHEMA_VERSION,
-    })
-}
-
-/// Top-level records outside chunks: metadata and attachments, up to the first unreadable one.
+/// Top-level records outside chunks: metadata and attachments, every one that reads.
 pub(crate) struct TopLevel {
     pub(crate) metadata: Vec<mcap::records::Metadata>,
     pub(crate) attachments: Vec<(mcap::records::AttachmentHeader, Vec<u8>)>,
+    /// Where the log is cut off or damaged (`None`: read whole).
     pub(crate) error: Option<String>,
-    pub(crate) footer: bool,
 }
 
 impl TopLevel {
@@ -236,55 +211,34 @@ impl TopLevel {
     }
 }
 
-pub(crate) fn top_level(path: &Path, bytes: &[u8]) -> Result<TopLevel> {
-    let reader = mcap::read::LinearReader::new_with_options(
-        bytes,
-        mcap::read::Options::IgnoreEndMagic.into(),
-    )
-    .map_err(|e| log_err(path, e))?;
-    let mut out = TopLevel {
-        metadata: Vec::new(),
-        attachments: Vec::new(),
-        error: None,
-        footer: false,
-    };
-    for record in reader {
-        match record {
-            Ok(mcap::records::Record::Metadata(m)) => out.metadata.push(m),
-            Ok(mcap::records::Record::Attachment { header, data, .. }) => {
-                out.attachments.push((header, data.into_owned()))
-            }
-            Ok(mcap::records::Record::Footer(_)) => out.footer = true,
-            Ok(_) => {}
-            Err(e) => {
-                out.error = Some(e.to_string());
-                break;
-            }
+impl TopLevel {
+    /// The top-level records of a salvaged log.
+    pub(crate) fn of(log: &Salvaged<'_>) -> Self {
+        Self {
+            metadata: log.metadata.clone(),
+            attachments: log.attachments.clone(),
+            error: log.loss.summary(),
         }
     }
-    Ok(out)
 }
 
-/// Read what `path` holds; stops (and says so in [`LogInfo::truncated`]) at a cut-off chunk.
+/// The top-level records of the log `bytes` (the file `path`).
+#[cfg(test)]
+pub(crate) fn top_level(path: &Path, bytes: &[u8]) -> Result<TopLevel> {
+    Ok(TopLevel::of(&Salvaged::read(path, bytes)?))
+}
+
+/// Read what `path` holds; a cut-off or damaged log is read past its damage and says so in
+/// [`LogInfo::truncated`].
 pub fn read_info(path: impl AsRef<Path>) -> Result<LogInfo> {
     let path = path.as_ref();
     let bytes = read_bytes(path)?;
-    let top = top_level(path, &bytes)?;
+    let log = Salvaged::read(path, &bytes)?;
+    let top = TopLevel::of(&log);
     let mut channels: Vec<ChannelInfo> = Vec::new();
     let mut span: Option<(u64, u64)> = None;
     let mut safety_events = Vec::new();
-    let mut message_error = None;
-    let stream =
-        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(|e| log_err(path, e))?;
-    for message in stream {
-        let m = match message {
-            Ok(m) => m,
-            Err(e) => {
-                message_error = Some(e.to_string());
-                break;
-            }
-        };
+    for m in log.messages() {
         let topic = &m.channel.topic;
         match channels.iter_mut().find(|c| &c.topic == topic) {
             Some(c) => c.messages += 1,
@@ -315,9 +269,7 @@ pub fn read_info(path: impl AsRef<Path>) -> Result<LogInfo> {
         .find(|(h, _)| h.name == "gait.json")
         .and_then(|(_, d)| std::str::from_utf8(d).ok())
         .and_then(|text| model::gait::GaitFile::from_json(text, "gait.json in log").ok());
-    let truncated = message_error
-        .or(top.error)
-        .or_else(|| (!top.footer).then(|| "no footer: the writer did not finish".to_string()));
+    let truncated = top.error;
     Ok(LogInfo {
         path: path.to_path_buf(),
         file_bytes: bytes.len() as u64,
@@ -339,125 +291,6 @@ pub fn read_info(path: impl AsRef<Path>) -> Result<LogInfo> {
     })
 }
 
-/// What [`recover`] rewrote.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RecoverStats {
-    /// Messages copied.
-    pub messages: u64,
-    /// Attachments copied.
-    pub attachments: u64,
-    /// Metadata records copied (plus the added `recovery` record).
-    pub metadata: u64,
-    /// The input was complete (had a footer) already.
-    pub input_complete: bool,
-}
-
-/// Rewrite every readable record of `input` into `output` (zstd chunks, summary and indexes),
-/// adding a `recovery` metadata record that says how much was recovered and why reading stopped.
-pub fn recover(input: impl AsRef<Path>, output: impl AsRef<Path>) -> Result<RecoverStats> {
-    let (input, output) = (input.as_ref(), output.as_ref());
-    let bytes = read_bytes(input)?;
-    let top = top_level(input, &bytes)?;
-    let file = std::fs::File::create(output).map_err(|error| RuntimeError::Io {
-        path: output.to_path_buf(),
-        error,
-    })?;
-    let mut writer = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
-        .profile("")
-        .library(concat!(
-            "adam-hzd runtime ",
-            env!("CARGO_PKG_VERSION"),
-            " (recovered)"
-        ))
-        .create(std::io::BufWriter::new(file))
-        .map_err(|e| log_err(output, e))?;
-    let mut stats = RecoverStats {
-        input_complete: top.footer && top.error.is_none(),
-        ..RecoverStats::default()
-    };
-    for (header, data) in &top.attachments {
-        writer
-            .attach(&mcap::Attachment {
-                log_time: header.log_time,
-                create_time: header.create_time,
-                name: header.name.clone(),
-                media_type: header.media_type.clone(),
-                data: std::borrow::Cow::Borrowed(data),
-            })
-            .map_err(|e| log_err(output, e))?;
-        stats.attachments += 1;
-    }
-    for m in &top.metadata {
-        writer.write_metadata(m).map_err(|e| log_err(output, e))?;
-        stats.metadata += 1;
-    }
-    let mut ids: BTreeMap<u16, u16> = BTreeMap::new();
-    let mut stop_reason = top.error.clone();
-    let stream =
-        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(|e| log_err(input, e))?;
-    for message in stream {
-        let m = match message {
-            Ok(m) => m,
-            Err(e) => {
-                stop_reason = Some(e.to_string());
-                break;
-            }
-        };
-        let id = match ids.get(&m.channel.id) {
-            Some(id) => *id,
-            None => {
-                check_schema_version(input, &m.channel)?;
-                let schema_id = match &m.channel.schema {
-                    Some(s) => writer
-                        .add_schema(&s.name, &s.encoding, &s.data)
-                        .map_err(|e| log_err(output, e))?,
-                    None => 0,
-                };
-                let id = writer
-                    .add_channel(
-                        schema_id,
-                        &m.channel.topic,
-                        &m.channel.message_encoding,
-                        &m.channel.metadata,
-                    )
-                    .map_err(|e| log_err(output, e))?;
-                ids.insert(m.channel.id, id);
-                id
-            }
-        };
-        writer
-            .write_to_known_channel(
-                &mcap::records::MessageHeader {
-                    channel_id: id,
-                    sequence: m.sequence,
-                    log_time: m.log_time,
-                    publish_time: m.publish_time,
-                },
-                &m.data,
-            )
-            .map_err(|e| log_err(output, e))?;
-        stats.messages += 1;
-    }
-    let mut note = BTreeMap::new();
-    note.insert("source".into(), input.display().to_string());
-    note.insert("source_bytes".into(), bytes.len().to_string());
-    note.insert("messages".into(), stats.messages.to_string());
-    note.insert(
-        "stopped".into(),
-        stop_reason.unwrap_or_else(|| "end of data".into()),
-    );
-    writer
-        .write_metadata(&mcap::records::Metadata {
-            name: "recovery".into(),
-            metadata: note,
-        })
-        .map_err(|e| log_err(output, e))?;
-    writer.finish().map_err(|e| log_err(output, e))?;
-    Ok(stats)
-}
-
 /// Joint positions and velocities of the four leg joints over a log (motor side as logged).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct JointSeries {
@@ -467,16 +300,21 @@ pub struct JointSeries {
     pub q_rad: [Vec<f64>; 4],
     /// Velocity per leg joint, rad/s.
     pub dq_rad_s: [Vec<f64>; 4],
+    /// Where the log is cut off or damaged, how much was read and what was lost (`None`: read
+    /// whole).
+    pub damage: Option<String>,
 }
 
-/// The `/joints` channel's leg-joint positions and velocities.
+/// The `/joints` channel's leg-joint positions and velocities, of every intact chunk of a
+/// damaged or cut-off log too ([`JointSeries::damage`] says what was lost).
 pub fn joint_series(path: &Path) -> Result<JointSeries> {
     let bytes = read_bytes(path)?;
-    let mut out = JointSeries::default();
-    let stream = mcap::MessageStream::new(&bytes)
-        .map_err(|e| log_err(path, format!("not an MCAP file: {e}")))?;
-    for message in stream {
-        let m = message.map_err(|e| log_err(path, format!("unreadable message: {e}")))?;
+    let log = Salvaged::read(path, &bytes)?;
+    let mut out = JointSeries {
+        damage: log.loss.summary(),
+        ..JointSeries::default()
+    };
+    for m in log.messages() {
         if m.channel.topic != "/joints" {
             continue;
         }
@@ -502,7 +340,13 @@ pub fn joint_series(path: &Path) -> Result<JointSeries> {
         }
     }
     if out.t_s.is_empty() {
-        return Err(log_err(path, "no /joints messages"));
+        return Err(log_err(
+            path,
+            match &out.damage {
+                Some(d) => format!("no /joints messages left to read ({d})"),
+                None => "no /joints messages".into(),
+            },
+        ));
     }
     Ok(out)
 }
@@ -515,7 +359,9 @@ mod tests {
     use crate::safety::Trip;
     use crate::sim::run::{walk, SimWalkOptions};
     use crate::slots::SlotLayout;
-    use crate::telemetry::log::{start, LogContext, LogRecord};
+    use crate::telemetry::log::{
+        start, LogContext, LogRecord, LOG_SCHEMA_VERSION, SCHEMA_VERSION_KEY,
+    };
     use crate::telemetry::sample::StateSample;
     use crate::Setup;
 
@@ -702,14 +548,35 @@ mod tests {
         assert_eq!(s.t_s.len(), 2000);
         // Knees stay bent forward (0..2.4 rad) while walking.
         assert!(s.q_rad[1].iter().all(|&q| (-0.1..2.5).contains(&q)));
-        // A file that is not MCAP, and a truncated log, give errors naming the file.
+        // A file that is not MCAP gives an error naming the file; a truncated log gives the
+        // series up to its cut, a prefix of the whole one, and says it was cut off (issue #27).
         let bad = path.with_extension("txt");
         std::fs::write(&bad, "not a log").unwrap();
         let e = read_info(&bad).unwrap_err().to_string();
         assert!(e.contains(&bad.display().to_string()), "{e}");
+        let e = joint_series(&bad).unwrap_err().to_string();
+        assert!(e.contains(&bad.display().to_string()), "{e}");
         let bytes = std::fs::read(&path).unwrap();
         std::fs::write(&bad, &bytes[..bytes.len() / 2]).unwrap();
-        assert!(joint_series(&bad).is_err());
+        let cut = joint_series(&bad).unwrap();
+        assert!(
+            !cut.t_s.is_empty() && cut.t_s.len() < 2000,
+            "{}",
+            cut.t_s.len()
+        );
+        assert_eq!(cut.t_s[..], s.t_s[..cut.t_s.len()]);
+        assert_eq!(cut.q_rad[1][..], s.q_rad[1][..cut.t_s.len()]);
+        assert!(
+            cut.damage.as_ref().is_some_and(|d| d.contains("cut off")),
+            "{cut:?}"
+        );
+        // Nothing readable left: an error that names the file and says why.
+        std::fs::write(&bad, &bytes[..200]).unwrap();
+        let e = joint_series(&bad).unwrap_err().to_string();
+        assert!(
+            e.contains(&bad.display().to_string()) && e.contains("no /joints"),
+            "{e}"
+        );
         std::fs::remove_file(&bad).ok();
         std::fs::remove_file(&path).ok();
     }

@@ -29,7 +29,8 @@ use crate::control::{
 };
 use crate::slots::{MotorSample, SLOTS};
 use crate::telemetry::log::{exact_from_json, joint_names, CHANNELS};
-use crate::telemetry::log_read::{check_schema_version, log_err, read_bytes, top_level, TopLevel};
+use crate::telemetry::log_read::{check_schema_version, log_err, read_bytes, TopLevel};
+use crate::telemetry::salvage::Salvaged;
 use crate::{Result, Setup};
 use drivers::imu::ImuSample;
 use serde_json::Value;
@@ -76,8 +77,15 @@ pub struct ReplayReport {
     /// The states the replayed controller went through, in order (consecutive repeats merged;
     /// never empty: the first is its state before the first tick).
     pub states: Vec<ControlState>,
-    /// The log was cut off here (replay covers every tick before it).
+    /// The log is cut off or damaged: where, how much was read and what was lost (replay
+    /// covers every tick up to the first one lost).
     pub truncated: Option<String>,
+    /// The log was rewritten by `adam logs recover`: what the recovery lost.
+    pub recovered: Option<String>,
+    /// Ticks missing after the last one replayed (lost to damage), where replay stopped.
+    pub gap: Option<String>,
+    /// Controller time of the last tick replayed, s.
+    pub last_t_s: f64,
 }
 
 impl std::fmt::Display for ReplayReport {
@@ -88,7 +96,25 @@ impl std::fmt::Display for ReplayReport {
         let states: Vec<&str> = self.states.iter().map(|s| s.name()).collect();
         writeln!(f, "states     {}", states.join(" → "))?;
         if let Some(t) = &self.truncated {
-            writeln!(f, "cut off    {t} (replayed every complete tick before it)")?;
+            writeln!(f, "not whole  {t}")?;
+        }
+        if let Some(r) = &self.recovered {
+            writeln!(f, "recovered  {r}")?;
+        }
+        if self.truncated.is_some() || self.recovered.is_some() {
+            let part = match &self.gap {
+                Some(g) => format!("; {g}: replay stops there"),
+                None if self.truncated.is_some() => {
+                    "; every tick the log still holds (replayed every complete tick)".into()
+                }
+                None => "; every tick of the recovered log".into(),
+            };
+            writeln!(
+                f,
+                "checked    ticks 0–{} (t = 0–{:.3} s){part}",
+                self.ticks.saturating_sub(1),
+                self.last_t_s
+            )?;
         }
         match &self.divergence {
             None => writeln!(f, "result     bit-identical"),
@@ -320,29 +346,37 @@ fn controller_of_log(path: &Path, top: &TopLevel) -> Result<(Setup, Controller, 
 pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
     let path = path.as_ref();
     let bytes = read_bytes(path)?;
-    let (setup, mut controller, mut out) = controller_of_log(path, &top_level(path, &bytes)?)?;
+    let log = Salvaged::read(path, &bytes)?;
+    let top = TopLevel::of(&log);
+    let (setup, mut controller, mut out) = controller_of_log(path, &top)?;
     let names = joint_names(&setup.config, controller.layout());
-    let stream =
-        mcap::MessageStream::new_with_options(&bytes, mcap::read::Options::IgnoreEndMagic.into())
-            .map_err(|e| log_err(path, e))?;
+    let recovered = top.metadata.iter().find(|m| m.name == "recovery").map(|m| {
+        let source = m.metadata.get("source").map_or("?", String::as_str);
+        let what = m
+            .metadata
+            .get("summary")
+            .or_else(|| m.metadata.get("stopped"));
+        format!("from {source}: {}", what.map_or("?", String::as_str))
+    });
+    // Ticks may be missing where chunks were lost; anywhere else a jump is an error.
+    let lossy = log.loss.summary().is_some()
+        || top
+            .metadata_value("recovery", "lost_chunks")
+            .is_some_and(|n| n != "0");
     let mut report = ReplayReport {
         path: path.to_path_buf(),
         ticks: 0,
         values_compared: 0,
         divergence: None,
         states: vec![controller.state()],
-        truncated: None,
+        truncated: log.loss.summary(),
+        recovered,
+        gap: None,
+        last_t_s: 0.0,
     };
     let mut pending: Option<(u64, TickInput)> = None;
     let mut checked = [false; 2];
-    for message in stream {
-        let m = match message {
-            Ok(m) => m,
-            Err(e) => {
-                report.truncated = Some(e.to_string());
-                break;
-            }
-        };
+    for m in log.messages() {
         let topic = m.channel.topic.as_str();
         let which = match topic {
             t if t == CHANNELS[6] => 0,
@@ -356,6 +390,14 @@ pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
         let v: Value = serde_json::from_slice(&m.data)
             .map_err(|e| log_err(path, format!("{topic} message is not JSON: {e}")))?;
         let tick = tick_of(path, topic, &v)?;
+        if lossy && tick != report.ticks && (which == 0 || pending.is_none()) {
+            report.gap = Some(format!(
+                "ticks {}–{} are missing (lost to damage)",
+                report.ticks,
+                tick.saturating_sub(1)
+            ));
+            break;
+        }
         if which == 0 {
             if let Some((k, _)) = pending {
                 return Err(log_err(
@@ -390,6 +432,7 @@ pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
         }
         controller.tick(&input, &mut out);
         report.ticks += 1;
+        report.last_t_s = input.t_s;
         if report.states.last() != Some(&out.status.state) {
             report.states.push(out.status.state);
         }
@@ -406,10 +449,15 @@ pub fn replay(path: impl AsRef<Path>) -> Result<ReplayReport> {
             break;
         }
     }
-    if report.ticks == 0 && report.truncated.is_none() {
+    if report.ticks == 0 {
         return Err(log_err(
             path,
-            "no /input and /command messages (a log written before replay support?)",
+            match &report.truncated {
+                Some(t) => format!("no complete tick left to replay ({t})"),
+                None => {
+                    "no /input and /command messages (a log written before replay support?)".into()
+                }
+            },
         ));
     }
     Ok(report)
@@ -502,6 +550,7 @@ pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
 mod tests {
     use super::*;
     use crate::sim::run::{walk, SimWalkOptions};
+    use crate::telemetry::log_read::top_level;
     use std::collections::BTreeMap;
 
     fn temp_path(tag: &str) -> PathBuf {
