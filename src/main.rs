@@ -119,8 +119,8 @@ fn dispatch(cli: Cli) -> Result<()> {
             command: LogsCommand::Info { log },
         } => logs::info(&log),
         Command::Logs {
-            command: LogsCommand::Recover { log, out },
-        } => logs::recover(log, out),
+            command: LogsCommand::Recover { log, out, force },
+        } => logs::recover(log, out, force),
         Command::Replay(args) => logs::replay(&args),
         Command::Model(args) => model::show_model(&args),
         Command::Bench {
@@ -136,11 +136,23 @@ fn dispatch(cli: Cli) -> Result<()> {
             what: BenchWhat::Check { runs, gait },
         } => bench::check(runs, &gait),
         Command::Plot {
-            what: PlotWhat::Portrait { log, compare, out },
-        } => logs::portrait(log, compare, out),
+            what:
+                PlotWhat::Portrait {
+                    log,
+                    compare,
+                    out,
+                    force,
+                },
+        } => logs::portrait(log, compare, out, force),
         Command::Plot {
-            what: PlotWhat::Tiles { log, count, out },
-        } => logs::tiles(log, count, out),
+            what:
+                PlotWhat::Tiles {
+                    log,
+                    count,
+                    out,
+                    force,
+                },
+        } => logs::tiles(log, count, out, force),
         Command::Op(args) => op::send(&args),
         Command::Codesign(args) => match &args.study {
             None => codesign::codesign(&args),

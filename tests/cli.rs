@@ -197,6 +197,17 @@ fn logs_info_and_phase_portraits_read_a_run_log() {
         out.contains("step 1 (") && out.contains("6 figures"),
         "{out}"
     );
+    // Figures are not written over without --force, and are with it.
+    let tiles_s = tiles.display().to_string();
+    let (ok, _, err) = adam(&["plot", "tiles", &log_s, "--out", &tiles_s]);
+    assert!(
+        !ok && err.contains("tiles.png") && err.contains("--force"),
+        "{err}"
+    );
+    let (ok, out, err) = adam(&[
+        "plot", "tiles", &log_s, "--count", "6", "--out", &tiles_s, "--force",
+    ]);
+    assert!(ok && out.contains("6 figures"), "{out}\n{err}");
     let svg = std::fs::read_to_string(tiles.with_extension("svg")).expect("svg");
     assert!(
         svg.contains("Gait tiles") && svg.contains("stance leg"),

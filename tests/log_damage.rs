@@ -72,11 +72,11 @@ fn every_reader_reads(path: &Path, what: &str) {
     );
     assert!(err.contains("warning"), "replay, {what}: {err}");
     let prefix = dir().join(format!("{what}-portrait")).display().to_string();
-    let (ok, out, err) = adam(&["plot", "portrait", &p, "--out", &prefix]);
+    let (ok, out, err) = adam(&["plot", "portrait", &p, "--out", &prefix, "--force"]);
     assert!(ok, "portrait, {what}: {out}\n{err}");
     assert!(err.contains("warning"), "portrait, {what}: {err}");
     let prefix = dir().join(format!("{what}-tiles")).display().to_string();
-    let (ok, out, err) = adam(&["plot", "tiles", &p, "--out", &prefix]);
+    let (ok, out, err) = adam(&["plot", "tiles", &p, "--out", &prefix, "--force"]);
     assert!(ok, "tiles, {what}: {out}\n{err}");
     assert!(err.contains("warning"), "tiles, {what}: {err}");
 }
@@ -86,7 +86,7 @@ fn recovers(path: &Path, what: &str, must_say: &[&str]) -> PathBuf {
     let p = path.display().to_string();
     let out_path = path.with_extension("recovered.mcap");
     let o = out_path.display().to_string();
-    let (ok, out, err) = adam(&["logs", "recover", &p, "--out", &o]);
+    let (ok, out, err) = adam(&["logs", "recover", &p, "--out", &o, "--force"]);
     assert!(ok, "recover, {what}: {out}\n{err}");
     assert!(!out.contains("intact"), "recover, {what}: {out}");
     for s in must_say {

@@ -2,10 +2,11 @@
 //! recovered, a log replayed through this build's controller, and figures drawn from logs.
 //! Every command reads a damaged log past its damage and warns (on stderr) what it lost.
 
-use crate::cli::paths::with_suffix;
+use crate::cli::paths::{writable, OUT_DIR};
 use crate::cli::plots;
+use crate::cli::shipped;
 use anyhow::{bail, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `adam replay`.
 #[derive(clap::Args)]
@@ -34,6 +35,9 @@ pub(crate) enum LogsCommand {
         /// Output (default: `<log stem>.recovered.mcap` beside the input).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write over an existing output.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -47,9 +51,12 @@ pub(crate) enum PlotWhat {
         /// A second run to overlay (e.g. another gait, seed or the hardware).
         #[arg(long)]
         compare: Option<PathBuf>,
-        /// Output prefix (default: the log's path without extension, + `-portrait`).
+        /// Output prefix (default: `out/<log stem>-portrait`).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write over existing figures.
+        #[arg(long)]
+        force: bool,
     },
     /// Gait tiles, like the paper's Fig. 5: stick figures at evenly spaced phases of one step
     /// of a logged walk, as PNG and SVG.
@@ -59,9 +66,12 @@ pub(crate) enum PlotWhat {
         /// Number of figures (phases 0, 1/(n−1), …, 1).
         #[arg(long, default_value_t = 8)]
         count: usize,
-        /// Output prefix (default: the log's path without extension, + `-tiles`).
+        /// Output prefix (default: `out/<log stem>-tiles`).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Write over existing figures.
+        #[arg(long)]
+        force: bool,
     },
 }
 
@@ -69,7 +79,10 @@ pub(crate) enum PlotWhat {
 pub(crate) fn replay(args: &ReplayArgs) -> Result<()> {
     let (logs, mint) = (&args.logs, args.mint.as_deref());
     if let Some(dir) = mint {
-        let setup = runtime::Setup::load("configs/runtime/adam.toml", runtime::DEFAULT_GAIT)?;
+        let setup = runtime::Setup::load(
+            shipped::input(Path::new(shipped::RUNTIME_CONFIG)),
+            shipped::input(Path::new(runtime::DEFAULT_GAIT)),
+        )?;
         let paths = runtime::telemetry::replay::mint_fixtures(&setup, dir)?;
         for (path, (_, what)) in paths.iter().zip(runtime::telemetry::replay::FIXTURES) {
             let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
@@ -107,15 +120,21 @@ pub(crate) fn info(log: &std::path::Path) -> Result<()> {
 }
 
 /// `adam logs recover`: rewrites a cut-off log with summary and indexes.
-pub(crate) fn recover(log: PathBuf, out: Option<PathBuf>) -> Result<()> {
+pub(crate) fn recover(log: PathBuf, out: Option<PathBuf>, force: bool) -> Result<()> {
     let out = out.unwrap_or_else(|| log.with_extension("recovered.mcap"));
+    writable(&out, force)?;
     let stats = runtime::telemetry::log_read::recover(&log, &out)?;
     print!("{stats}");
     Ok(())
 }
 
 /// `adam plot portrait`: phase portraits of one run, or two overlaid.
-pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathBuf>) -> Result<()> {
+pub(crate) fn portrait(
+    log: PathBuf,
+    compare: Option<PathBuf>,
+    out: Option<PathBuf>,
+    force: bool,
+) -> Result<()> {
     let a = runtime::telemetry::log_read::joint_series(&log)?;
     let b = compare
         .as_ref()
@@ -140,7 +159,7 @@ pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathB
             series: b,
         });
     }
-    let prefix = out.unwrap_or_else(|| with_suffix(&log, "-portrait"));
+    let prefix = figure_prefix(&log, out, "-portrait", force)?;
     plots::portraits(&prefix, &runs)?;
     println!(
         "wrote {} and {}",
@@ -151,7 +170,7 @@ pub(crate) fn portrait(log: PathBuf, compare: Option<PathBuf>, out: Option<PathB
 }
 
 /// `adam plot tiles`: stick figures of one step of a logged walk.
-pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>) -> Result<()> {
+pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>, force: bool) -> Result<()> {
     let tiles = runtime::tiles::gait_tiles(&log, count)?;
     if let Some(d) = &tiles.damage {
         eprintln!(
@@ -159,7 +178,7 @@ pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>) -> Result<
             log.display()
         );
     }
-    let prefix = out.unwrap_or_else(|| with_suffix(&log, "-tiles"));
+    let prefix = figure_prefix(&log, out, "-tiles", force)?;
     let name = log
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
@@ -175,4 +194,17 @@ pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>) -> Result<
         prefix.with_extension("svg").display()
     );
     Ok(())
+}
+
+/// The output prefix of a figure: `out` or `out/<log stem><suffix>`, checked so that neither its
+/// PNG nor its SVG is written over without `--force`.
+fn figure_prefix(log: &Path, out: Option<PathBuf>, suffix: &str, force: bool) -> Result<PathBuf> {
+    let prefix = out.unwrap_or_else(|| {
+        let stem = log.file_stem().unwrap_or_default().to_string_lossy();
+        Path::new(OUT_DIR).join(format!("{stem}{suffix}"))
+    });
+    for extension in ["png", "svg"] {
+        writable(&prefix.with_extension(extension), force)?;
+    }
+    Ok(prefix)
 }
