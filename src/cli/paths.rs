@@ -54,15 +54,6 @@ pub(crate) fn relative_path(target: &std::path::Path, from: &std::path::Path) ->
     parts.join("/")
 }
 
-/// `dir/stem.ext` → `dir/stem<suffix>` (an output prefix beside an input file).
-pub(crate) fn with_suffix(path: &std::path::Path, suffix: &str) -> PathBuf {
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!("{stem}{suffix}"))
-}
-
 /// `logs/<UTC timestamp>.mcap`, e.g. `logs/20250101-120000.mcap`.
 pub(crate) fn timestamped_log_path() -> PathBuf {
     let secs = std::time::SystemTime::now()
