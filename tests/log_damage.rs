@@ -40,6 +40,8 @@ fn walk_log() -> &'static [u8] {
 }
 
 fn write(name: &str, bytes: &[u8]) -> (PathBuf, String) {
+    // Tests run in parallel: the folder may not be made yet by the one that logs the walk.
+    std::fs::create_dir_all(dir()).expect("dir");
     let path = dir().join(name);
     std::fs::write(&path, bytes).expect("write");
     let s = path.display().to_string();
