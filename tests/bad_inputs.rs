@@ -2,12 +2,12 @@
 //! and its sibling `<case>.expect` lists the words its error must contain (format:
 //! `tests/bad_inputs/README.md`). Each case goes through the library loader of its kind, not the
 //! CLI: it must not panic, it must be refused, and the error must contain every expected word and
-//! the case's file name (CAN frames excepted: they have no file behind them in the codec).
+//! the case's file name (CAN frames and CLI flags excepted: they have no file behind them).
 
 use std::path::{Path, PathBuf};
 
 /// The kinds of input: folder, file extension.
-const KINDS: [(&str, &str); 7] = [
+const KINDS: [(&str, &str); 9] = [
     ("urdf", "urdf"),
     ("gait", "json"),
     ("gait_robot", "json"),
@@ -15,6 +15,8 @@ const KINDS: [(&str, &str); 7] = [
     ("runtime_config", "toml"),
     ("faults", "toml"),
     ("can", "can"),
+    ("mcap", "mcap"),
+    ("cli", "args"),
 ];
 
 fn corpus() -> PathBuf {
@@ -64,6 +66,12 @@ fn load(kind: &str, path: &Path) -> Vec<Result<String, String>> {
             runtime::sim::faults::FaultProfile::load(path),
         )],
         "can" => vec![decode_can(path)],
+        // What every reader of a log meets first (`adam plot`, `adam logs`): nothing usable left.
+        "mcap" => vec![refused(
+            "log_read::joint_series",
+            runtime::telemetry::log_read::joint_series(path),
+        )],
+        "cli" => vec![run_cli(path)],
         other => panic!("unknown kind {other}"),
     }
 }
@@ -97,6 +105,30 @@ fn decode_can(path: &Path) -> Result<String, String> {
         "host" => message(codec::decode_host_frame(id, &data).map(drop)),
         other => Err(format!("case file: unknown frame kind {other}")),
     }
+}
+
+/// An `.args` case: one line of `adam` arguments (split at white space), run by the binary from
+/// the repository's root; it must fail, without a panic, and its stderr is the message.
+fn run_cli(path: &Path) -> Result<String, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("read: {e}"))?;
+    let line = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .ok_or("no argument line")?;
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_adam"))
+        .args(line.split_whitespace())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .map_err(|e| format!("adam did not start: {e}"))?;
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    if out.status.success() {
+        return Err(format!("adam {line} succeeded"));
+    }
+    if stderr.contains("panicked") {
+        return Err(format!("adam {line} PANICKED: {stderr}"));
+    }
+    Ok(stderr)
 }
 
 /// The expected words of a case: the non-empty lines of `<case>.expect` that are not comments.
@@ -161,7 +193,8 @@ fn check(kind: &str, path: &Path) -> Vec<String> {
                     .map(String::as_str)
                     .filter(|w| !message.contains(w))
                     .collect();
-                if kind != "can" && !message.contains(&file_name) {
+                // CAN frames and CLI flags have no file behind them.
+                if !matches!(kind, "can" | "cli") && !message.contains(&file_name) {
                     missing.push(&file_name);
                 }
                 if !missing.is_empty() {
