@@ -63,10 +63,11 @@ impl PlanarModel {
         let d = self.dynamics(q, &vec![0.0; self.dof()])?.mass_matrix;
         let _ = writeln!(
             w,
-            "\nD(q) at q = {:?}:",
+            "\nD(q) at q = [{}]:",
             q.iter()
-                .map(|v| (v * 1e4).round() / 1e4)
+                .map(|v| format!("{v:.4}"))
                 .collect::<Vec<_>>()
+                .join(", ")
         );
         for r in 0..d.nrows() {
             let row: Vec<String> = (0..d.ncols())

@@ -476,7 +476,11 @@ impl ClosedLoop {
         );
         let u = big_a.clone().lu().solve(&rhs).ok_or_else(|| {
             PlannerError::Solver(format!(
-                "decoupling matrix A is singular at q = {qr:?}: {big_a}"
+                "decoupling matrix A is singular at q = [{}] (reduced coordinates): {big_a}",
+                qr.iter()
+                    .map(|v| format!("{v:.4}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ))
         })?;
         let mut ddq = a0;

@@ -113,7 +113,8 @@ impl HzdProblem {
                     let leg = biped.legs.side(side);
                     if leg.thigh_design.is_none() || leg.shin_design.is_none() {
                         return Err(robot_error(format!(
-                            "co-design needs thigh and shin design joints in the {side:?} leg"
+                            "co-design needs thigh and shin design joints in the {} leg",
+                            side.prefix()
                         )));
                     }
                     thigh_bodies[k] = biped.model.joints[leg.hip].body;

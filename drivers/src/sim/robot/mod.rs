@@ -161,7 +161,7 @@ pub enum RobotSimError {
         found: usize,
     },
     /// A state puts a foot below the ground.
-    #[error("{side:?} foot is {depth_m} m below the ground")]
+    #[error("{} foot is {depth_m} m below the ground", side.prefix())]
     Penetration {
         /// Which foot.
         side: Side,
