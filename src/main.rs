@@ -135,6 +135,9 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Bench {
             what: BenchWhat::Check { runs, gait },
         } => bench::check(runs, &gait),
+        Command::Bench {
+            what: BenchWhat::Library(args),
+        } => bench::library(&args),
         Command::Plot {
             what:
                 PlotWhat::Portrait {

@@ -7,9 +7,10 @@
 use std::path::{Path, PathBuf};
 
 /// The kinds of input: folder, file extension.
-const KINDS: [(&str, &str); 9] = [
+const KINDS: [(&str, &str); 10] = [
     ("urdf", "urdf"),
     ("gait", "json"),
+    ("gait_library", "json"),
     ("gait_robot", "json"),
     ("planner_config", "toml"),
     ("runtime_config", "toml"),
@@ -42,6 +43,10 @@ fn load(kind: &str, path: &Path) -> Vec<Result<String, String>> {
             model::PlanarModel::from_urdf_file(path),
         )],
         "gait" => vec![refused("GaitFile::load", model::gait::GaitFile::load(path))],
+        "gait_library" => vec![refused(
+            "GaitLibrary::load",
+            model::library::GaitLibrary::load(path),
+        )],
         // Where the gait and its robot meet: the planner's and the runtime's loaders.
         "gait_robot" => vec![
             refused(

@@ -28,6 +28,18 @@ fn every_config_file_loads_and_validates() {
                 m.legs()
                     .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             }
+            // A gait library (`*_library.json`), checked against the URDF it names.
+            Some("json") if path.to_string_lossy().ends_with("_library.json") => {
+                let library =
+                    model::library::GaitLibrary::load(path).unwrap_or_else(|e| panic!("{e}"));
+                let (urdf_path, urdf) = library.read_urdf(path).unwrap_or_else(|e| panic!("{e}"));
+                let origin = urdf_path.display().to_string();
+                let robot = model::PlanarModel::from_urdf_str(&urdf, &origin)
+                    .unwrap_or_else(|e| panic!("{e}"));
+                library
+                    .check_against(&robot, &urdf, &path.display().to_string(), &origin)
+                    .unwrap_or_else(|e| panic!("{e}"));
+            }
             Some("json") => {
                 model::gait::GaitFile::load(path).unwrap_or_else(|e| panic!("{e}"));
             }

@@ -59,6 +59,31 @@ pub enum PlannerError {
         /// The most violated constraint groups at the end, worst first, with their violation.
         violated: Vec<(String, f64)>,
     },
+    /// A speed list (`adam plan library --speeds`) is not one.
+    #[error("speeds '{spec}': {reason}")]
+    InvalidSpeeds {
+        /// The list as given (`lo:hi:step` or `v1,v2,…`).
+        spec: String,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The gaits that planned and verified leave a hole in the library wider than
+    /// [`crate::library::MAX_GAP_MPS`].
+    #[error("the gait library would have a hole from {from_mps} to {to_mps} m/s ({:.3} m/s wide, at most {} allowed){}", to_mps - from_mps, crate::library::MAX_GAP_MPS, failed_text(failed))]
+    LibraryHole {
+        /// The speed below the hole (a gait, or the slowest speed asked for), m/s.
+        from_mps: f64,
+        /// The speed above it, m/s.
+        to_mps: f64,
+        /// The speeds in it that failed, with their reasons.
+        failed: String,
+    },
+    /// No speed of a library gave a gait that planned and verified.
+    #[error("no speed gave a gait for the library{}", failed_text(failed))]
+    EmptyLibrary {
+        /// The speeds that failed, with their reasons.
+        failed: String,
+    },
     /// The solver itself reported an error.
     #[error("solver error: {0}")]
     Solver(String),
@@ -73,4 +98,12 @@ fn violated_text(violated: &[(String, f64)]) -> String {
         .map(|(what, v)| format!("{what} {v:.2e}"))
         .collect();
     format!("; most violated: {}", list.join(", "))
+}
+
+fn failed_text(failed: &str) -> String {
+    if failed.is_empty() {
+        String::new()
+    } else {
+        format!("; left out: {failed}")
+    }
 }

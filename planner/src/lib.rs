@@ -29,6 +29,8 @@
 //! - [`guess`]: the hand-built first step the feasibility solve starts from.
 //! - [`plan`]: the paper's two-step solve and the gait file it writes.
 //! - [`verify`]: the independent check of a gait (`adam gait check`).
+//! - [`library`]: a gait per speed for one design, each warm-started from its neighbour and
+//!   verified (`adam plan library`), written as a [`model::library::GaitLibrary`].
 //! - [`codesign`]: thigh and shin lengths as variables (`adam codesign`), and the convergence
 //!   study.
 //!
@@ -47,6 +49,7 @@ pub mod collocation;
 pub mod config;
 mod error;
 pub mod guess;
+pub mod library;
 pub mod nlp;
 pub mod plan;
 pub mod verify;

@@ -123,3 +123,68 @@ fn a_bad_or_unreachable_speed_band_is_refused_naming_the_fields() {
         }
     }
 }
+
+/// A three-speed library of the shipped robot: the middle speed planned cold, its neighbours
+/// from its optimum in fewer iterations, every gait at its speed, stable (|λ| < 1 from the
+/// Poincaré check, recorded in the entry) and walking the step it plans (within the check's
+/// tolerance); the library validates and each entry carries its feed-forward table.
+#[test]
+fn a_three_speed_library_warm_starts_from_the_middle_and_verifies() {
+    use planner::library::{plan_library, LibraryOptions};
+    let urdf_path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/robots/adam_codesign.urdf"
+    );
+    let config_path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../configs/planner/adam_library.toml"
+    );
+    let text = std::fs::read_to_string(urdf_path).expect("URDF");
+    let model = model::PlanarModel::from_urdf_str(&text, urdf_path).expect("model");
+    let config = PlannerConfig::load(config_path).expect("config");
+    let speeds = [0.2, 0.225, 0.25];
+    let plan = plan_library(
+        &model,
+        "../robots/adam_codesign.urdf",
+        &text,
+        &config,
+        &speeds,
+        LibraryOptions::default(),
+    )
+    .expect("plans");
+    let o = &plan.outcomes;
+    assert_eq!(o.len(), 3);
+    for s in o {
+        println!(
+            "{} m/s: {} in {} iterations, {:.2} s",
+            s.speed_mps,
+            if s.warm { "warm" } else { "cold" },
+            s.iterations,
+            s.solve_time_s
+        );
+    }
+    assert!(!o[1].warm && o[0].warm && o[2].warm);
+    assert!(o[0].iterations < o[1].iterations && o[2].iterations < o[1].iterations);
+    let library = plan.library().expect("no hole");
+    library.validate("planned").expect("valid");
+    assert_eq!(library.entries.len(), 3);
+    for (e, v) in library.entries.iter().zip(speeds) {
+        let g = &e.gait;
+        assert_eq!(e.speed_mps, v);
+        assert!(
+            (g.step_length_m / g.step_duration_s - v).abs() < 2e-6,
+            "{v}"
+        );
+        assert!(e.check.spectral_radius < 1.0, "{v}: {:?}", e.check);
+        let radius = e
+            .check
+            .eigenvalues
+            .iter()
+            .map(|[re, im]| re.hypot(*im))
+            .fold(0.0, f64::max);
+        assert!((radius - e.check.spectral_radius).abs() < 1e-12);
+        assert!(e.check.duration_error(g) < planner::verify::STEP_DURATION_TOLERANCE);
+        assert!(g.feedforward.is_some());
+        assert_eq!(g.robot, library.robot);
+    }
+}

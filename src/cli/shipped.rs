@@ -25,7 +25,7 @@ pub(crate) const RUNTIME_CONFIG: &str = "configs/runtime/adam.toml";
 pub(crate) const CONFIG_DIR_ENV: &str = "ADAM_CONFIG_DIR";
 
 /// The files shipped in `configs/`, embedded: (path under `configs/`, contents).
-const EMBEDDED: [(&str, &str); 9] = [
+const EMBEDDED: [(&str, &str); 11] = [
     (
         "runtime/adam.toml",
         include_str!("../../configs/runtime/adam.toml"),
@@ -33,6 +33,14 @@ const EMBEDDED: [(&str, &str); 9] = [
     (
         "planner/adam.toml",
         include_str!("../../configs/planner/adam.toml"),
+    ),
+    (
+        "planner/adam_library.toml",
+        include_str!("../../configs/planner/adam_library.toml"),
+    ),
+    (
+        "gaits/adam_library.json",
+        include_str!("../../configs/gaits/adam_library.json"),
     ),
     (
         "planner/five_link.toml",

@@ -1,7 +1,10 @@
-//! `adam bench plan` and `adam bench check`: the plan and the gait check repeated, a row per
-//! run and the medians.
+//! `adam bench plan`, `adam bench check` and `adam bench library`: the plan, the gait check and
+//! the gait library repeated, a row per run and the medians.
 
+mod library;
 mod report;
+
+pub(crate) use library::library;
 
 use crate::cli::plan::PhaseSeconds;
 use crate::cli::shipped;
@@ -29,6 +32,9 @@ pub(crate) enum BenchWhat {
         #[arg(long, value_parser = crate::cli::plan::parse_backend)]
         backend: Option<planner::config::SolverBackend>,
     },
+    /// Plan the gait library of `adam plan library` `--runs` times (nothing written): wall and
+    /// CPU time per run, and the medians.
+    Library(library::LibraryBenchArgs),
     /// Verify a gait `--runs` times like `adam gait check` (Newton on the Poincaré map,
     /// eigenvalues): wall time per run, the median, and whether the reports are identical.
     Check {

@@ -1,6 +1,8 @@
 //! `adam plan` and `adam gait check`: the HZD gait planned with live progress and a summary
-//! table, and a gait file verified on its own (Newton on the Poincaré map, eigenvalues).
+//! table, and a gait file verified on its own (Newton on the Poincaré map, eigenvalues);
+//! `adam plan library` (in `library`): a gait per speed, written as one library file.
 
+pub(crate) mod library;
 mod report;
 
 pub(crate) use report::{GaitFigures, PhaseSeconds};
@@ -12,9 +14,13 @@ use model::PlanarModel;
 use report::{OrbitCheck, PlanSummary};
 use std::path::PathBuf;
 
-/// Arguments of `adam plan`.
+/// Arguments of `adam plan` (or its subcommand, `adam plan library`).
 #[derive(clap::Args)]
+#[command(args_conflicts_with_subcommands = true)]
 pub(crate) struct PlanArgs {
+    /// `library`: a gait per speed instead of one gait.
+    #[command(subcommand)]
+    command: Option<PlanCommand>,
     /// Robot URDF.
     #[arg(long, default_value = "configs/robots/adam_planar.urdf")]
     robot: PathBuf,
@@ -30,6 +36,15 @@ pub(crate) struct PlanArgs {
     /// NLP backend, overriding the config's `[solver] backend`: `ripopt` or `native`.
     #[arg(long, value_parser = parse_backend)]
     backend: Option<planner::config::SolverBackend>,
+}
+
+/// The subcommands of `adam plan`.
+#[derive(clap::Subcommand)]
+pub(crate) enum PlanCommand {
+    /// Plan a gait per walking speed for one robot (each warm-started from its neighbour),
+    /// verify each (Poincaré eigenvalues, the step it walks) and write one gait library file;
+    /// fails if the gaits left out leave a hole wider than 0.05 m/s.
+    Library(library::LibraryArgs),
 }
 
 /// The subcommands of `adam gait`.
@@ -78,7 +93,11 @@ pub(crate) fn progress_printer() -> impl FnMut(planner::plan::Progress<'_>) {
 
 /// `adam plan`: plans the gait, writes it, prints the summary and its verification.
 pub(crate) fn plan(args: &PlanArgs) -> Result<()> {
+    if let Some(PlanCommand::Library(library)) = &args.command {
+        return library::plan_library(library);
+    }
     let PlanArgs {
+        command: _,
         robot,
         config,
         out,
