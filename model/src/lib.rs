@@ -10,6 +10,7 @@
 //!                                                             impact map Δ + relabeling
 //! DesignLengths ──(design: cubic inertia fits)──▶ URDF text + PlanarModel   (GenerateModel)
 //! Bézier α, phase τ(q) ──(bezier, phase)──▶ y^d, dy^d/dτ, d²y^d/dτ²  ──(gait)──▶ gait file JSON
+//! gait files by speed, each with its check ──(library)──▶ gait library JSON
 //! ```
 //!
 //! Every kinematic and dynamic function is generic over the scalar [`Real`]: `f64` for the
@@ -34,6 +35,7 @@ mod error;
 pub mod gait;
 mod json_path;
 pub mod kinematics;
+pub mod library;
 pub mod linalg;
 pub mod phase;
 mod report;
