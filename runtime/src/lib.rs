@@ -102,22 +102,35 @@ impl Setup {
     /// Loads the runtime config, the gait file and the URDF the gait names (relative to the gait
     /// file's folder), checking the URDF's SHA-256 and the gait against the robot
     /// ([`model::gait::GaitFile::check_against`]: state lengths, Bézier coefficients within the
-    /// joint limits).
+    /// joint limits); and the gait library of the config's `speed.library` (relative to the
+    /// config file's folder), if set ([`Setup::load_library`]).
     pub fn load(
         config_path: impl AsRef<std::path::Path>,
         gait_path: impl AsRef<std::path::Path>,
     ) -> Result<Self> {
+        let config_path = config_path.as_ref();
         let config = config::RuntimeConfig::load(config_path)?;
         let gait_path = gait_path.as_ref();
         let gait = model::gait::GaitFile::load_unchecked(gait_path)?;
         let (urdf_path, text) = gait.read_urdf(gait_path)?;
-        Self::assemble(
+        let library = config.speed.library.clone();
+        let setup = Self::assemble(
             config,
             gait,
             &gait_path.display().to_string(),
             text,
             &urdf_path.display().to_string(),
-        )
+        )?;
+        match library {
+            // Relative to the config file's folder.
+            Some(rel) => setup.load_library(
+                config_path
+                    .parent()
+                    .unwrap_or_else(|| std::path::Path::new("."))
+                    .join(rel),
+            ),
+            None => Ok(setup),
+        }
     }
 
     /// A setup from an already-parsed config and gait and the URDF text the gait names
@@ -180,6 +193,26 @@ impl Setup {
             self.model.clone(),
             with_held,
         )
+    }
+
+    /// Adds the gait library file at `path` ([`model::library::GaitLibrary`]: gaits by speed,
+    /// of this setup's robot: the check names both robots otherwise) for treadmill speed
+    /// control. Errors name the file, the entry and the field.
+    pub fn load_library(self, path: impl AsRef<std::path::Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let origin = path.display().to_string();
+        let library = model::library::GaitLibrary::load(path)?;
+        library.check_against(
+            &self.model,
+            &self.urdf_text,
+            &origin,
+            &format!("the URDF of the gait ({})", self.gait.robot.name),
+        )?;
+        let origins: Vec<String> = (0..library.entries.len())
+            .map(|k| format!("{origin}: entries[{k}].gait"))
+            .collect();
+        let gaits = library.entries.into_iter().map(|e| e.gait).collect();
+        self.with_library(gaits, &origins)
     }
 
     /// Adds a gait library (gaits sorted by speed, each checked against the robot like the

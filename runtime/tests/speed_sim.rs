@@ -163,3 +163,94 @@ fn follows_a_belt_step_up_and_back() {
     assert!((during - 0.30).abs() < 0.03, "{during}");
     assert!((after - 0.20).abs() < 0.03, "{after}");
 }
+
+/// The test library as a library file ([`model::library::GaitLibrary`]) in `dir`, its URDF
+/// named by absolute path; the checks are those `adam plan` printed for each gait (|λ|max,
+/// verified step length and duration).
+fn write_library_file(dir: &Path, robot_name: &str) -> PathBuf {
+    use model::library::{GaitLibrary, LibraryCheck, LibraryEntry};
+    let checks = [
+        (0.9405, 0.1201, 0.8582),
+        (0.9256, 0.1401, 0.8321),
+        (0.9080, 0.1601, 0.8236),
+        (0.8921, 0.1800, 0.8069),
+        (0.8745, 0.2000, 0.7977),
+        (0.8595, 0.2200, 0.7969),
+        (0.8494, 0.2399, 0.7938),
+        (0.8460, 0.2599, 0.7933),
+        (0.8266, 0.2798, 0.7905),
+    ];
+    let setup = setup();
+    let mut robot = setup.gait.robot.clone();
+    robot.name = robot_name.to_string();
+    robot.urdf = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../configs/robots/adam_codesign.urdf")
+        .display()
+        .to_string();
+    let entries = setup
+        .library
+        .iter()
+        .zip(checks)
+        .map(|(g, (radius, length, duration))| {
+            let mut gait = g.clone();
+            gait.robot.name = robot_name.to_string();
+            LibraryEntry {
+                speed_mps: g.speed_mps,
+                gait,
+                check: LibraryCheck {
+                    eigenvalues: vec![[radius, 0.0]],
+                    spectral_radius: radius,
+                    fixed_point_residual: 1e-9,
+                    verified_step_length_m: length,
+                    verified_step_duration_s: duration,
+                },
+            }
+        })
+        .collect();
+    let library = GaitLibrary {
+        schema_version: model::library::LIBRARY_SCHEMA_VERSION,
+        robot,
+        entries,
+    };
+    let path = dir.join(format!("library-{robot_name}.json"));
+    library.save(&path).expect("save the library");
+    path
+}
+
+/// A library file named by the runtime config's `speed.library` loads with the setup; one of
+/// another robot is refused, the error naming both robots.
+#[test]
+fn the_config_names_a_library_file_and_one_of_another_robot_is_refused() {
+    let dir = std::env::temp_dir().join(format!("adam-speed-library-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let config_text =
+        std::fs::read_to_string(root.join("configs/runtime/adam.toml")).expect("config");
+    let gait = root.join(runtime::DEFAULT_GAIT);
+    let robot = setup().gait.robot.name.clone();
+    let good = write_library_file(&dir, &robot);
+    let config = dir.join("runtime.toml");
+    let with_library = |library: &Path| {
+        config_text.replace(
+            "[speed]\n",
+            &format!("[speed]\nlibrary = \"{}\"\n", library.display()),
+        )
+    };
+    std::fs::write(&config, with_library(&good)).expect("write config");
+    let setup = Setup::load(&config, &gait).expect("setup with its library");
+    assert_eq!(setup.library.len(), 9);
+    assert!(
+        (setup.library[0].speed_mps - 0.15).abs() < 1e-3
+            && (setup.library[8].speed_mps - 0.35).abs() < 1e-3
+    );
+    let bad = write_library_file(&dir, "other_robot");
+    std::fs::write(&config, with_library(&bad)).expect("write config");
+    let err = Setup::load(&config, &gait)
+        .expect_err("a library of another robot")
+        .to_string();
+    assert!(
+        err.contains("other_robot") && err.contains(&robot),
+        "the error names both robots: {err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -35,6 +35,10 @@ pub struct SpeedConfig {
     /// operator integrated against the measured steps).
     #[serde(default)]
     pub position_source: PositionSource,
+    /// The gait library file ([`model::library::GaitLibrary`]), relative to the config file's
+    /// folder (absent: no library, speed control off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub library: Option<String>,
 }
 
 /// Where the robot's position along the belt comes from.
@@ -55,6 +59,7 @@ impl Default for SpeedConfig {
             integral_limit_mps: 0.1,
             max_change_per_step_mps: 0.02,
             position_source: PositionSource::Odometry,
+            library: None,
         }
     }
 }
