@@ -58,7 +58,7 @@ enum Command {
     /// walk on. Prints ticks, overruns, trips by reason, log drops, worst tick, distance.
     Soak(run::SoakArgs),
     /// Figures from run logs: `adam plot portrait <run.mcap> [--compare <other.mcap>]`,
-    /// `adam plot tiles <run.mcap>`.
+    /// `adam plot tiles <run.mcap>`, `adam plot speed <run.mcap>`.
     Plot {
         #[command(subcommand)]
         what: logs::PlotWhat,
@@ -156,6 +156,9 @@ fn dispatch(cli: Cli) -> Result<()> {
                     force,
                 },
         } => logs::tiles(log, count, out, force),
+        Command::Plot {
+            what: PlotWhat::Speed { log, out, force },
+        } => logs::speed(log, out, force),
         Command::Op(args) => op::send(&args),
         Command::Codesign(args) => match &args.study {
             None => codesign::codesign(&args),

@@ -19,6 +19,13 @@ pub trait Backend: MotorBus + Imu {
     fn true_pitch_rad(&self) -> Option<f64> {
         None
     }
+
+    /// The robot's true position along the treadmill's belt (+ forward of where it started),
+    /// m, where the backend knows it (a simulator); `None` on hardware. Logged beside the
+    /// speed control's estimate, never used by the controller.
+    fn true_belt_position_m(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// An IMU at rest at a fixed pitch (for tests and bench runs without robot dynamics), its gyro

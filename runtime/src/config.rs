@@ -1,10 +1,15 @@
 //! The runtime config (`configs/runtime/*.toml`): loop rate, buses, motors, gains, ramp,
 //! safety limits, held joint positions, logging and telemetry, and the treadmill's belt speed
-//! range ([`TreadmillConfig`]: every belt speed a run asks for is checked against it).
+//! range ([`TreadmillConfig`]: every belt speed a run asks for is checked against it), and the
+//! treadmill speed control's gains ([`SpeedConfig`]).
 //!
 //! Checked data: `deny_unknown_fields` everywhere, a `schema_version`, and [`RuntimeConfig::validate`]
 //! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
 //! [`drivers::timing::validate`] refuses, naming the file, the field and the value.
+
+mod speed;
+
+pub use speed::{PositionSource, SpeedConfig};
 
 use crate::slots::{SlotLayout, LEG_SLOTS, MAX_HELD, SLOTS};
 use crate::{Result, RuntimeError};
@@ -348,6 +353,9 @@ pub struct RuntimeConfig {
     /// The treadmill (absent: [`DEFAULT_BELT_SPEED_RANGE_MPS`]).
     #[serde(default)]
     pub treadmill: TreadmillConfig,
+    /// Speed control on the treadmill (absent: [`SpeedConfig::default`]).
+    #[serde(default)]
+    pub speed: SpeedConfig,
 }
 
 /// The URDF joint of each leg slot.
@@ -615,6 +623,7 @@ impl RuntimeConfig {
             "estimator.touchdown_pitch_sigma_rad",
             e.touchdown_pitch_sigma_rad,
         )?;
+        self.speed.validate(origin)?;
         let [lo, hi] = self.treadmill.belt_speed_range_mps;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
             return Err(bad(

@@ -8,14 +8,14 @@
 //! | module | what |
 //! |---|---|
 //! | [`slots`] | the motor slots everyone shares: [`slots::MotorSample`], [`slots::SlotLayout`], slot counts (a leaf) |
-//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints |
-//! | [`control`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine ([`control::Controller`]); double support |
+//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints, treadmill speed control (`[speed]`) |
+//! | [`control`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine ([`control::Controller`]); double support; treadmill speed control at impacts (a gait library by speed, a step-to-step regulator, the belt-position loop: [`Setup::library`], [`control::Controller::with_library`]) |
 //! | [`estimator`] | torso pitch Kalman filter with gyro-bias estimation |
 //! | [`safety`] | per-tick checks; a [`safety::Trip`] (small `Copy` enum) sends the controller to Damping |
-//! | [`operator`] | operator commands into the loop: SPSC ring + latching e-stop flag, never blocks |
+//! | [`operator`] | operator commands into the loop: SPSC ring + latching e-stop flag, never blocks; belt speed and speed offset (`belt 0.25`, keys `+`/`-`) |
 //! | [`backend`] | what the loop runs on: [`backend::Backend`] = [`drivers::bus::MotorBus`] + [`drivers::imu::Imu`]; [`backend::WithImu`] (pair a bus with an IMU) |
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
-//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures) |
+//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures); the `/speed` channel ([`telemetry::speed_log`], [`telemetry::speed_read`]: `adam plot speed`) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
 //! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]) |
@@ -93,28 +93,44 @@ pub struct Setup {
     pub model: model::PlanarModel,
     /// The URDF text of that model (attached to every log, so a log replays on its own).
     pub urdf_text: String,
+    /// Gaits of the same robot sorted by speed, for treadmill speed control (empty: walk
+    /// [`Setup::gait`] only). Attached to the log when not empty.
+    pub library: Vec<model::gait::GaitFile>,
 }
 
 impl Setup {
     /// Loads the runtime config, the gait file and the URDF the gait names (relative to the gait
     /// file's folder), checking the URDF's SHA-256 and the gait against the robot
     /// ([`model::gait::GaitFile::check_against`]: state lengths, Bézier coefficients within the
-    /// joint limits).
+    /// joint limits); and the gait library of the config's `speed.library` (relative to the
+    /// config file's folder), if set ([`Setup::load_library`]).
     pub fn load(
         config_path: impl AsRef<std::path::Path>,
         gait_path: impl AsRef<std::path::Path>,
     ) -> Result<Self> {
+        let config_path = config_path.as_ref();
         let config = config::RuntimeConfig::load(config_path)?;
         let gait_path = gait_path.as_ref();
         let gait = model::gait::GaitFile::load_unchecked(gait_path)?;
         let (urdf_path, text) = gait.read_urdf(gait_path)?;
-        Self::assemble(
+        let library = config.speed.library.clone();
+        let setup = Self::assemble(
             config,
             gait,
             &gait_path.display().to_string(),
             text,
             &urdf_path.display().to_string(),
-        )
+        )?;
+        match library {
+            // Relative to the config file's folder.
+            Some(rel) => setup.load_library(
+                config_path
+                    .parent()
+                    .unwrap_or_else(|| std::path::Path::new("."))
+                    .join(rel),
+            ),
+            None => Ok(setup),
+        }
     }
 
     /// A setup from an already-parsed config and gait and the URDF text the gait names
@@ -154,6 +170,7 @@ impl Setup {
             gait,
             model,
             urdf_text,
+            library: Vec::new(),
         })
     }
 
@@ -167,8 +184,56 @@ impl Setup {
         )
     }
 
-    /// A controller for this setup.
+    /// A controller for this setup (with its gait library, if any).
     pub fn controller(&self, with_held: bool) -> Result<control::Controller> {
-        control::Controller::new(&self.config, &self.gait, self.model.clone(), with_held)
+        control::Controller::with_library(
+            &self.config,
+            &self.gait,
+            &self.library,
+            self.model.clone(),
+            with_held,
+        )
+    }
+
+    /// Adds the gait library file at `path` ([`model::library::GaitLibrary`]: gaits by speed,
+    /// of this setup's robot: the check names both robots otherwise) for treadmill speed
+    /// control. Errors name the file, the entry and the field.
+    pub fn load_library(self, path: impl AsRef<std::path::Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let origin = path.display().to_string();
+        let library = model::library::GaitLibrary::load(path)?;
+        library.check_against(
+            &self.model,
+            &self.urdf_text,
+            &origin,
+            &format!("the URDF of the gait ({})", self.gait.robot.name),
+        )?;
+        let origins: Vec<String> = (0..library.entries.len())
+            .map(|k| format!("{origin}: entries[{k}].gait"))
+            .collect();
+        let gaits = library.entries.into_iter().map(|e| e.gait).collect();
+        self.with_library(gaits, &origins)
+    }
+
+    /// Adds a gait library (gaits sorted by speed, each checked against the robot like the
+    /// gait; `origins` name them in errors) for treadmill speed control.
+    pub fn with_library(
+        mut self,
+        library: Vec<model::gait::GaitFile>,
+        origins: &[String],
+    ) -> Result<Self> {
+        let urdf_origin = format!("the URDF of {}", self.gait.robot.name);
+        for (k, g) in library.iter().enumerate() {
+            let origin = origins
+                .get(k)
+                .cloned()
+                .unwrap_or_else(|| format!("gait library entry {k}"));
+            g.validate(&origin)?;
+            g.check_against(&self.model, &origin, &urdf_origin)?;
+        }
+        self.library = library;
+        // Built once here so a bad library fails at load, not at the first walk.
+        self.controller(false)?;
+        Ok(self)
     }
 }

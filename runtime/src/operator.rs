@@ -29,8 +29,8 @@ pub struct OperatorReceiver {
 }
 
 /// The ring is full: the control loop is not consuming commands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("operator queue full, `{}` not sent", command.name())]
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[error("operator queue full, `{}` not sent", command.text())]
 pub struct QueueFull {
     /// The command that was not sent.
     pub command: OperatorCommand,
@@ -121,22 +121,52 @@ impl CommandSink for SharedHandle {
     }
 }
 
+/// How much the keyboard's `+` and `-` change the speed offset, m/s.
+pub const NUDGE_MPS: f64 = 0.025;
+
 /// A keyboard line as a command: `s`/`start`, `w`/`walk`, `p`/`stop`, `d`/`damp`, `r`/`reset`,
-/// `e`/`estop`/`x` (case-insensitive, surrounding blanks ignored); anything else is `None`.
+/// `e`/`estop`/`x`, `+`/`-` (speed offset ± [`NUDGE_MPS`]), `b 0.25`/`belt 0.25` (belt speed,
+/// m/s), `offset 0.05`, `nudge -0.025` (case-insensitive, surrounding blanks ignored); anything
+/// else is `None` ([`parse_command`] says why).
 pub fn parse_key(line: &str) -> Option<OperatorCommand> {
-    match line.trim().to_ascii_lowercase().as_str() {
-        "s" => Some(OperatorCommand::Start),
-        "w" => Some(OperatorCommand::Walk),
-        "p" => Some(OperatorCommand::Stop),
-        "d" => Some(OperatorCommand::Damp),
-        "r" => Some(OperatorCommand::Reset),
-        "e" | "x" | "e-stop" => Some(OperatorCommand::EStop),
-        name => OperatorCommand::from_name(name),
+    parse_command(line).ok()
+}
+
+/// [`parse_key`], with an error that says what is wrong (an unknown word, a missing or
+/// non-finite speed).
+pub fn parse_command(line: &str) -> Result<OperatorCommand, String> {
+    let line = line.trim().to_ascii_lowercase();
+    let mut words = line.splitn(2, char::is_whitespace);
+    let first = words.next().unwrap_or("");
+    let rest = words.next().unwrap_or("").trim();
+    let unit = |c: OperatorCommand| {
+        if rest.is_empty() {
+            Ok(c)
+        } else {
+            Err(format!("`{first}` takes no value (got `{rest}`)"))
+        }
+    };
+    match first {
+        "s" => unit(OperatorCommand::Start),
+        "w" => unit(OperatorCommand::Walk),
+        "p" => unit(OperatorCommand::Stop),
+        "d" => unit(OperatorCommand::Damp),
+        "r" => unit(OperatorCommand::Reset),
+        "e" | "x" | "e-stop" => unit(OperatorCommand::EStop),
+        "+" => unit(OperatorCommand::Nudge {
+            delta_mps: NUDGE_MPS,
+        }),
+        "-" => unit(OperatorCommand::Nudge {
+            delta_mps: -NUDGE_MPS,
+        }),
+        "b" => OperatorCommand::parse(&format!("belt {rest}")),
+        _ => OperatorCommand::parse(&line),
     }
 }
 
 /// The keys [`parse_key`] knows, for a prompt.
-pub const KEY_HELP: &str = "keys + Enter: s start, w walk, p stop, d damp, r reset, e e-stop";
+pub const KEY_HELP: &str = "keys + Enter: s start, w walk, p stop, d damp, r reset, e e-stop, \
+                            b <m/s> belt speed, + / - speed offset ±0.025 m/s";
 
 /// Reads commands from `input` (stdin in the CLI) on a thread of its own until it ends or the
 /// ring is gone; unknown lines are reported on stderr. Never touches the control thread.
@@ -154,19 +184,25 @@ pub fn spawn_keyboard<R: std::io::BufRead + Send + 'static, H: CommandSink>(
                     }
                 }
                 None if line.trim().is_empty() => {}
-                None => eprintln!("operator: unknown key `{}` ({KEY_HELP})", line.trim()),
+                None => eprintln!(
+                    "operator: `{}`: {} ({KEY_HELP})",
+                    line.trim(),
+                    parse_command(&line).err().unwrap_or_default()
+                ),
             }
         }
     })
 }
 
 /// An operator command on the wire: fixed-size, plain old data, for iceoryx2.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "iceoryx2", derive(ZeroCopySend))]
 #[repr(C)]
 pub struct OperatorMessage {
     /// [`OperatorMessage::code`] of the command.
     pub code: u32,
+    /// The value of a valued command (belt speed, offset, nudge), m/s; 0 otherwise.
+    pub value_mps: f64,
 }
 
 impl OperatorMessage {
@@ -179,6 +215,9 @@ impl OperatorMessage {
             OperatorCommand::Damp => 4,
             OperatorCommand::Reset => 5,
             OperatorCommand::EStop => 6,
+            OperatorCommand::Belt { .. } => 7,
+            OperatorCommand::Offset { .. } => 8,
+            OperatorCommand::Nudge { .. } => 9,
         }
     }
 
@@ -186,14 +225,29 @@ impl OperatorMessage {
     pub fn new(command: OperatorCommand) -> Self {
         Self {
             code: Self::code(command),
+            value_mps: command.value_mps().unwrap_or(0.0),
         }
     }
 
-    /// The command, or `None` for an unknown code (a message of another version).
+    /// The command, or `None` for an unknown code (a message of another version) or a
+    /// non-finite value.
     pub fn command(&self) -> Option<OperatorCommand> {
-        OperatorCommand::ALL
+        if let Some(c) = OperatorCommand::ALL
             .into_iter()
             .find(|&c| Self::code(c) == self.code)
+        {
+            return Some(c);
+        }
+        let name = match self.code {
+            7 => "belt",
+            8 => "offset",
+            9 => "nudge",
+            _ => return None,
+        };
+        if !self.value_mps.is_finite() {
+            return None;
+        }
+        OperatorCommand::with_value(name, self.value_mps)
     }
 }
 
@@ -344,7 +398,55 @@ mod tests {
             assert_eq!(parse_key(cmd.name()), Some(cmd));
         }
 
-        assert_eq!(OperatorMessage { code: 99 }.command(), None);
+        assert_eq!(
+            OperatorMessage {
+                code: 99,
+                value_mps: 0.0
+            }
+            .command(),
+            None
+        );
+        // Speed commands: keys, words, the wire and the log text, and their errors.
+        let belt = OperatorCommand::Belt { speed_mps: 0.25 };
+        assert_eq!(parse_key("b 0.25"), Some(belt));
+        assert_eq!(parse_key(" Belt 0.25 "), Some(belt));
+        assert_eq!(
+            parse_key("+"),
+            Some(OperatorCommand::Nudge {
+                delta_mps: NUDGE_MPS
+            })
+        );
+        assert_eq!(
+            parse_key("-"),
+            Some(OperatorCommand::Nudge {
+                delta_mps: -NUDGE_MPS
+            })
+        );
+        for cmd in [
+            belt,
+            OperatorCommand::Offset { speed_mps: -0.05 },
+            OperatorCommand::Nudge {
+                delta_mps: 0.1 + 0.2,
+            },
+        ] {
+            assert_eq!(OperatorMessage::new(cmd).command(), Some(cmd));
+            assert_eq!(OperatorCommand::parse(&cmd.text()), Ok(cmd));
+        }
+        let nan = OperatorMessage {
+            code: 7,
+            value_mps: f64::NAN,
+        };
+        assert_eq!(nan.command(), None);
+        let err = parse_command("belt").unwrap_err();
+        assert!(err.contains("needs a speed"), "{err}");
+        let err = parse_command("belt fast").unwrap_err();
+        assert!(err.contains("`fast` is not a number"), "{err}");
+        let err = parse_command("belt inf").unwrap_err();
+        assert!(err.contains("not a finite speed"), "{err}");
+        let err = parse_command("walk 3").unwrap_err();
+        assert!(err.contains("takes no value"), "{err}");
+        let err = parse_command("jump").unwrap_err();
+        assert!(err.contains("unknown command `jump`"), "{err}");
     }
 
     #[test]

@@ -73,6 +73,19 @@ pub(crate) enum PlotWhat {
         #[arg(long)]
         force: bool,
     },
+    /// Treadmill speed control: belt speed, commanded and measured walking speed, the library
+    /// speed in use, and the estimated (and, simulated, true) position on the belt against time,
+    /// as PNG and SVG.
+    Speed {
+        /// The run (with speed control: a gait library and a belt speed).
+        log: PathBuf,
+        /// Output prefix (default: `out/<log stem>-speed`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write over existing figures.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 /// `adam replay`: each log replayed through this build's controller, or the fixtures minted.
@@ -190,6 +203,28 @@ pub(crate) fn tiles(log: PathBuf, count: usize, out: Option<PathBuf>, force: boo
         tiles.step_length_m,
         tiles.step_duration_s,
         tiles.figures.len(),
+        prefix.with_extension("png").display(),
+        prefix.with_extension("svg").display()
+    );
+    Ok(())
+}
+
+/// `adam plot speed`: belt and walking speed and the position on the belt against time, from
+/// the `/speed` channel of a run with treadmill speed control.
+pub(crate) fn speed(log: PathBuf, out: Option<PathBuf>, force: bool) -> Result<()> {
+    let rows = runtime::telemetry::speed_read::read_speed(&log)?;
+    let prefix = figure_prefix(&log, out, "-speed", force)?;
+    let name = log
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    plots::speed(&prefix, &rows, &name)?;
+    let clamped = rows.iter().filter(|r| r.clamped).count();
+    println!(
+        "{} steps from {:.2} s to {:.2} s ({clamped} with the command clamped to the library): wrote {} and {}",
+        rows.len(),
+        rows[0].t_s,
+        rows[rows.len() - 1].t_s,
         prefix.with_extension("png").display(),
         prefix.with_extension("svg").display()
     );

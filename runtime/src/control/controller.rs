@@ -48,6 +48,7 @@
 
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
+use super::speed::{SpeedLibrary, SpeedRegulator};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
     braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
@@ -131,6 +132,10 @@ pub struct Controller {
     trip: Option<Trip>,
     motors: [MotorSample; SLOTS],
     last_imu_t_s: Option<f64>,
+    /// The gait library by speed (`None`: the one gait, no switching).
+    library: Option<SpeedLibrary>,
+    /// The step-to-step speed regulator and the belt-position loop.
+    regulator: SpeedRegulator,
 }
 
 impl Controller {
@@ -139,6 +144,19 @@ impl Controller {
     pub fn new(
         config: &RuntimeConfig,
         gait: &GaitFile,
+        model: PlanarModel,
+        with_held: bool,
+    ) -> Result<Self> {
+        Self::with_library(config, gait, &[], model, with_held)
+    }
+
+    /// [`Controller::new`] with a gait library (gaits sorted by `speed_mps`, at least two; empty:
+    /// none): once the operator sets a belt speed, each impact switches to the library's gait
+    /// for the regulated speed (`runtime::control::speed`). `gait` is walked until then.
+    pub fn with_library(
+        config: &RuntimeConfig,
+        gait: &GaitFile,
+        library: &[GaitFile],
         model: PlanarModel,
         with_held: bool,
     ) -> Result<Self> {
@@ -195,6 +213,17 @@ impl Controller {
                 ),
             }
         })?;
+        let library = SpeedLibrary::new(
+            library,
+            (gait, &gait_table),
+            &model,
+            &legs,
+            &geometry,
+            stop_step_m,
+        )?;
+        let longest_step_s = library.as_ref().map_or(gait.step_duration_s, |l| {
+            l.longest_step_s().max(gait.step_duration_s)
+        });
         let layout = SlotLayout::new(config, with_held);
         let zero_ramp = Ramp {
             start_t_s: 0.0,
@@ -239,7 +268,7 @@ impl Controller {
             stance: gait.stance_leg,
             steps: 0,
             step_start_t_s: 0.0,
-            step_timeout_s: config.safety.max_step_duration_factor * gait.step_duration_s,
+            step_timeout_s: config.safety.max_step_duration_factor * longest_step_s,
             touchdown_ticks: 0,
             last_foot: None,
             phase_hat: None,
@@ -255,6 +284,8 @@ impl Controller {
             trip: None,
             motors: [MotorSample::default(); SLOTS],
             last_imu_t_s: None,
+            library,
+            regulator: SpeedRegulator::new(&config.speed, gait.speed_mps),
             model,
         })
     }
@@ -298,6 +329,7 @@ impl Controller {
         self.last_foot = None;
         self.phase_hat = None;
         self.steps = 0;
+        self.regulator.restart();
         self.enter(ControlState::Walk, status);
         true
     }
@@ -375,6 +407,7 @@ impl Controller {
                 self.step_start_t_s = t_s;
                 self.touchdown_ticks = 0;
                 self.steps = 0;
+                self.regulator.restart();
                 self.launch_requested = true;
                 self.enter(S::Walk, status);
             }
@@ -429,8 +462,12 @@ impl Controller {
         }
         // Operator, then safety (a trip overrides any request).
         if let Some(cmd) = input.operator {
-            self.handle_operator(cmd, t, status);
+            if !self.regulator.operator(cmd) {
+                self.handle_operator(cmd, t, status);
+            }
         }
+        self.regulator.advance(t);
+        let mut speed_update = false;
         let safety_in = SafetyInput {
             t_s: t,
             motors: &self.motors,
@@ -565,6 +602,9 @@ impl Controller {
                         self.estimator
                             .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
                     }
+                    // The step that ends: its length (feet at the impact) and duration.
+                    let step_length_m = self.feet_offset_at(self.estimator.pitch_rad(), &leg_q)[0];
+                    let step_duration_s = t - self.step_start_t_s;
                     // Impact: relabel the legs and start the next step.
                     self.stance = self.stance.other();
                     self.start_blend = None;
@@ -580,8 +620,18 @@ impl Controller {
                         self.braking = !self.braking;
                     }
                     // The new step starts at the measured phase, at the speed of the old one.
-                    let rate = self.phase_hat.map_or(0.0, |(_, r, _)| r);
+                    let mut rate = self.phase_hat.map_or(0.0, |(_, r, _)| r);
                     eval = self.walk_references(t, &leg_q, &leg_dq);
+                    if self.state == ControlState::Walk && self.regulator.active() {
+                        speed_update = true;
+                        rate = self.switch_speed(
+                            step_length_m,
+                            step_duration_s,
+                            rate,
+                            (t, &leg_q, &leg_dq),
+                            &mut eval,
+                        );
+                    }
                     self.phase_hat = Some((eval.phase, rate, t));
                     self.observe_phase(t, &mut eval);
                 }
@@ -626,6 +676,51 @@ impl Controller {
             trip: self.trip,
             new_trip: status.new_trip,
             leg_q_rad: leg_q,
+            speed: self.regulator.status,
+            speed_update,
         };
+    }
+
+    /// At an impact in Walk with speed control on: measures the step that ended, runs the
+    /// regulator and, with a library, switches to the gait of the regulated speed, carrying the
+    /// references' jump into the new step as a blend (`runtime::control::speed`). Returns the
+    /// phase rate to start the new step at; `eval` becomes the new step's first references.
+    fn switch_speed(
+        &mut self,
+        step_length_m: f64,
+        step_duration_s: f64,
+        rate: f64,
+        (t, leg_q, leg_dq): (f64, &[f64; LEG_SLOTS], &[f64; LEG_SLOTS]),
+        eval: &mut walk::WalkEval,
+    ) -> f64 {
+        let Some(library) = &self.library else {
+            self.regulator
+                .on_impact(step_length_m, step_duration_s, (0.0, f64::INFINITY));
+            return rate;
+        };
+        let sigma = self
+            .regulator
+            .on_impact(step_length_m, step_duration_s, library.range_mps());
+        let span_old = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
+        let y_old = eval.y;
+        library.blend_into(sigma, &mut self.gait, &mut self.lunge);
+        let span_new = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
+        // The same stance-leg angle rate, in the new gait's phase units.
+        let rate = if span_new.abs() > 1e-9 {
+            rate * span_old / span_new
+        } else {
+            rate
+        };
+        *eval = self.walk_references(t, leg_q, leg_dq);
+        let mut offset = [0.0; OUTPUTS];
+        for (i, o) in offset.iter_mut().enumerate() {
+            *o = y_old[i] - eval.y[i];
+        }
+        self.start_blend = Some(StartBlend {
+            from_phase: eval.phase.clamp(0.0, 1.0),
+            offset,
+        });
+        *eval = self.references(eval.phase, eval.phase_rate, eval.foot_height_m);
+        rate
     }
 }

@@ -6,16 +6,19 @@
 //! | [`tick`] | [`TickInput`], [`TickOutput`], [`Status`], [`JointCommand`], [`OperatorCommand`], [`ControlState`] |
 //! | [`controller`] | the [`Controller`]: state machine and tick; its Walk evaluation and joint commands |
 //! | `gait_table` | the gait in fixed arrays: Bézier outputs, stance relabeling, feed-forward |
+//! | `speed` | treadmill speed control: the gait library by speed, interpolated at impact; the step-to-step regulator and the belt-position loop |
 //! | `transitions` | ramp, launch, start blend, braking step; minimum-jerk blends |
 //! | `double_support` | kinematics with both feet down: torso pose, inverse kinematics |
 
 pub mod controller;
 mod double_support;
 mod gait_table;
+mod speed;
 pub mod tick;
 mod transitions;
 
 pub use controller::Controller;
 pub use tick::{
-    CommandMode, ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput,
+    CommandMode, ControlState, JointCommand, OperatorCommand, SpeedStatus, Status, TickInput,
+    TickOutput,
 };

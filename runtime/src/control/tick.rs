@@ -7,7 +7,7 @@ use drivers::imu::ImuSample;
 use model::Side;
 
 /// Operator requests, delivered through [`crate::operator`] without blocking the tick.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OperatorCommand {
     /// Idle → Ramp (to the gait's first pose, then Stand).
     Start,
@@ -21,10 +21,26 @@ pub enum OperatorCommand {
     Reset,
     /// Any → Damping with [`Trip::EStop`].
     EStop,
+    /// The treadmill's belt speed is now `speed_mps` (m/s, the belt surface moving backwards):
+    /// the speed control follows it and keeps the robot at the belt's centre.
+    Belt {
+        /// Belt speed, m/s.
+        speed_mps: f64,
+    },
+    /// Walk this much faster than the belt (a steady offset of the commanded speed), m/s.
+    Offset {
+        /// Speed offset, m/s.
+        speed_mps: f64,
+    },
+    /// Change the speed offset by this much (the keyboard's `+`/`-`), m/s.
+    Nudge {
+        /// Change of the speed offset, m/s.
+        delta_mps: f64,
+    },
 }
 
 impl OperatorCommand {
-    /// Every command, in declaration order.
+    /// Every command without a value, in declaration order.
     pub const ALL: [OperatorCommand; 6] = [
         OperatorCommand::Start,
         OperatorCommand::Walk,
@@ -34,7 +50,11 @@ impl OperatorCommand {
         OperatorCommand::EStop,
     ];
 
-    /// Name for logs (`start`, `walk`, `stop`, `damp`, `reset`, `estop`).
+    /// The names of the commands with a value (`belt 0.25`, `offset 0.05`, `nudge -0.025`).
+    pub const VALUED: [&'static str; 3] = ["belt", "offset", "nudge"];
+
+    /// Name for logs (`start`, `walk`, `stop`, `damp`, `reset`, `estop`, `belt`, `offset`,
+    /// `nudge`); [`OperatorCommand::text`] adds the value.
     pub fn name(self) -> &'static str {
         match self {
             OperatorCommand::Start => "start",
@@ -43,12 +63,82 @@ impl OperatorCommand {
             OperatorCommand::Damp => "damp",
             OperatorCommand::Reset => "reset",
             OperatorCommand::EStop => "estop",
+            OperatorCommand::Belt { .. } => "belt",
+            OperatorCommand::Offset { .. } => "offset",
+            OperatorCommand::Nudge { .. } => "nudge",
         }
     }
 
-    /// The command of a [`OperatorCommand::name`].
+    /// The value of a valued command, m/s.
+    pub fn value_mps(self) -> Option<f64> {
+        match self {
+            OperatorCommand::Belt { speed_mps } | OperatorCommand::Offset { speed_mps } => {
+                Some(speed_mps)
+            }
+            OperatorCommand::Nudge { delta_mps } => Some(delta_mps),
+            _ => None,
+        }
+    }
+
+    /// The command of a [`OperatorCommand::name`] without a value.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// The valued command `name` with `value_mps` (`None`: not a valued name).
+    pub fn with_value(name: &str, value_mps: f64) -> Option<Self> {
+        match name {
+            "belt" => Some(OperatorCommand::Belt {
+                speed_mps: value_mps,
+            }),
+            "offset" => Some(OperatorCommand::Offset {
+                speed_mps: value_mps,
+            }),
+            "nudge" => Some(OperatorCommand::Nudge {
+                delta_mps: value_mps,
+            }),
+            _ => None,
+        }
+    }
+
+    /// The command as text: its name, then its value in shortest round-trip form
+    /// (`belt 0.25`): [`OperatorCommand::parse`] reads it back bit for bit (logs, replay).
+    pub fn text(self) -> String {
+        match self.value_mps() {
+            Some(v) => format!("{} {v}", self.name()),
+            None => self.name().to_string(),
+        }
+    }
+
+    /// Parses `name` or `name value` ([`OperatorCommand::text`]); the error says what is wrong.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut words = text.split_whitespace();
+        let name = words.next().unwrap_or("");
+        let value = words.next();
+        if let Some(extra) = words.next() {
+            return Err(format!("unexpected `{extra}` after the command"));
+        }
+        match (Self::from_name(name), value) {
+            (Some(c), None) => return Ok(c),
+            (Some(_), Some(v)) => return Err(format!("`{name}` takes no value (got `{v}`)")),
+            (None, _) => {}
+        }
+        if !Self::VALUED.contains(&name) {
+            return Err(format!(
+                "unknown command `{name}` (start, walk, stop, damp, reset, estop, belt <m/s>, \
+                 offset <m/s>, nudge <m/s>)"
+            ));
+        }
+        let Some(v) = value else {
+            return Err(format!("`{name}` needs a speed in m/s, e.g. `{name} 0.25`"));
+        };
+        let value_mps: f64 = v
+            .parse()
+            .map_err(|_| format!("`{name}`: `{v}` is not a number (m/s)"))?;
+        if !value_mps.is_finite() {
+            return Err(format!("`{name}`: {v} is not a finite speed"));
+        }
+        Self::with_value(name, value_mps).ok_or_else(|| format!("unknown command `{name}`"))
     }
 }
 
@@ -206,6 +296,55 @@ pub struct Status {
     pub new_trip: bool,
     /// Model-side leg joint angles, rad.
     pub leg_q_rad: [f64; LEG_SLOTS],
+    /// The speed control after the last impact ([`SpeedStatus::UNKNOWN`] without one).
+    pub speed: SpeedStatus,
+    /// An impact updated [`Status::speed`] this tick (a step was measured).
+    pub speed_update: bool,
+}
+
+/// The treadmill speed control after an impact (`runtime::control::speed`): what the operator
+/// set, what the last step measured and what the next step walks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeedStatus {
+    /// Belt speed set by the operator, m/s (NaN: none yet).
+    pub belt_mps: f64,
+    /// Speed offset set by the operator, m/s.
+    pub offset_mps: f64,
+    /// Commanded speed before clamping to the library's range, m/s.
+    pub requested_mps: f64,
+    /// Commanded walking speed (belt + offset − position loop, clamped), m/s.
+    pub commanded_mps: f64,
+    /// The last step's measured speed over the belt (length / duration), m/s.
+    pub step_speed_mps: f64,
+    /// The last step's length (front foot minus rear foot at the impact, leg kinematics), m.
+    pub step_length_m: f64,
+    /// The last step's duration (impact to impact), s.
+    pub step_duration_s: f64,
+    /// Estimated position on the belt (+ forward of where speed control began), m.
+    pub position_m: f64,
+    /// Speed of the library gait the next step walks (interpolated), m/s.
+    pub library_mps: f64,
+    /// The regulator's integral term, m/s.
+    pub integral_mps: f64,
+    /// The requested speed was outside the library's range and clamped.
+    pub clamped: bool,
+}
+
+impl SpeedStatus {
+    /// Nothing known yet.
+    pub const UNKNOWN: Self = Self {
+        belt_mps: f64::NAN,
+        offset_mps: 0.0,
+        requested_mps: f64::NAN,
+        commanded_mps: f64::NAN,
+        step_speed_mps: f64::NAN,
+        step_length_m: f64::NAN,
+        step_duration_s: f64::NAN,
+        position_m: 0.0,
+        library_mps: f64::NAN,
+        integral_mps: 0.0,
+        clamped: false,
+    };
 }
 
 /// Everything the controller writes in one tick.
@@ -238,6 +377,8 @@ impl Default for TickOutput {
                 trip: None,
                 new_trip: false,
                 leg_q_rad: [0.0; LEG_SLOTS],
+                speed: SpeedStatus::UNKNOWN,
+                speed_update: false,
             },
         }
     }

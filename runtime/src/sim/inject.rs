@@ -175,6 +175,9 @@ impl Backend for FaultySim {
     fn true_pitch_rad(&self) -> Option<f64> {
         self.bus.true_pitch_rad()
     }
+    fn true_belt_position_m(&self) -> Option<f64> {
+        self.bus.true_belt_position_m()
+    }
 }
 
 /// Simulated time that wakes the loop late inside overrun faults: a deadline `d` in

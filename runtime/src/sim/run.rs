@@ -140,6 +140,10 @@ impl Backend for SimBus<RobotSim> {
     fn true_pitch_rad(&self) -> Option<f64> {
         Some(self.plant().torso_pitch_rad())
     }
+    /// The hip's world x on the treadmill (the loop logs it relative to its first value).
+    fn true_belt_position_m(&self) -> Option<f64> {
+        Some(self.plant().base_position_m()[0])
+    }
 }
 
 /// The simulated robot behind a `SimBus`, in the gait's planned post-impact state, its leg
@@ -254,11 +258,18 @@ pub fn walk_with_operator(
         });
     }
     let clock = FaultClock::new(&schedule);
+    let script = if setup.library.is_empty() {
+        Vec::new()
+    } else {
+        belt_script(belt_speed_mps, &schedule)
+    };
     let backend = FaultySim::new(setup, bus, profile, schedule)?;
     let mut loop_options = LoopOptions::simulation(options.duration_s);
     loop_options.start_walking = true;
     loop_options.log_path = options.log_path.clone();
     loop_options.stop_after_trip_s = options.stop_after_trip_s;
+    loop_options.script = script;
+
     // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
     loop_options.realtime = options.real_time;
     let (summary, backend) = if options.real_time {
@@ -324,6 +335,34 @@ pub fn walk_with_operator(
         report.speed_mps = length_sum_m / duration_sum_s;
     }
     Ok(report)
+}
+
+/// The belt's speed as an operator tells it to speed control: at the start, and at the start
+/// and end of every belt step of the fault schedule (operator commands, so the log replays).
+fn belt_script(
+    belt_speed_mps: f64,
+    schedule: &[crate::sim::faults::ScheduledFault],
+) -> Vec<(f64, crate::control::OperatorCommand)> {
+    use crate::control::OperatorCommand;
+    let mut script = vec![(
+        0.0,
+        OperatorCommand::Belt {
+            speed_mps: belt_speed_mps,
+        },
+    )];
+    for f in schedule {
+        if let Fault::BeltSpeed { speed_mps } = f.fault {
+            script.push((f.start_s, OperatorCommand::Belt { speed_mps }));
+            script.push((
+                f.end_s,
+                OperatorCommand::Belt {
+                    speed_mps: belt_speed_mps,
+                },
+            ));
+        }
+    }
+    script.sort_by(|a, b| a.0.total_cmp(&b.0));
+    script
 }
 
 /// How long the soak lets the robot lie in Damping after a trip before it resets, s.

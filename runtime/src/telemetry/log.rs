@@ -12,7 +12,8 @@
 //! values), `/transitions` (state changes), and for replay (`adam replay`, [`crate::telemetry::replay`])
 //! `/input` (everything the controller read in a tick: time, motor replies, IMU sample,
 //! operator command, overrun streak) and `/command` (every command it wrote, and its state),
-//! both every tick whatever `log_every_n_ticks` says. Floats in `/input` and `/command` are
+//! both every tick whatever `log_every_n_ticks` says; `/speed` (one message per step while
+//! treadmill speed control runs: [`crate::telemetry::speed_log`]). Floats in `/input` and `/command` are
 //! written in shortest round-trip form and read back bit for bit (serde_json
 //! `float_roundtrip`); non-finite values are the strings `"NaN"`, `"inf"`, `"-inf"`.
 //! The gait file, the runtime config and the robot's URDF are attached, so a log replays on
@@ -59,6 +60,15 @@ pub enum LogRecord {
         from: ControlState,
         /// To.
         to: ControlState,
+    },
+    /// Treadmill speed control at an impact.
+    Speed {
+        /// Time, s.
+        t_s: f64,
+        /// The controller's speed status after the impact.
+        speed: crate::control::SpeedStatus,
+        /// True position on the belt (simulator), m.
+        true_position_m: Option<f64>,
     },
 }
 
@@ -147,7 +157,7 @@ pub const LOG_SCHEMA_VERSION: u32 = 1;
 pub const SCHEMA_VERSION_KEY: &str = "adam_log_schema";
 
 /// Names of the logged channels.
-pub const CHANNELS: [&str; 8] = [
+pub const CHANNELS: [&str; 9] = [
     "/joints",
     "/hzd",
     "/estimator",
@@ -156,10 +166,14 @@ pub const CHANNELS: [&str; 8] = [
     "/transitions",
     "/input",
     "/command",
+    "/speed",
 ];
 
 /// Attachment names: the gait file, the runtime config, the robot's URDF.
 pub const ATTACHMENTS: [&str; 3] = ["gait.json", "runtime.toml", "robot.urdf"];
+
+/// The attachment of a run with a gait library: a JSON array of gait files, sorted by speed.
+pub const LIBRARY_ATTACHMENT: &str = "library.json";
 
 /// What the log describes besides the records.
 #[derive(Clone, Debug)]
@@ -174,6 +188,8 @@ pub struct LogContext {
     pub config_toml: String,
     /// The robot's URDF (attachment).
     pub urdf_text: String,
+    /// The gait library as a JSON array (attachment [`LIBRARY_ATTACHMENT`]; `None`: none).
+    pub library_json: Option<String>,
     /// Free-form run metadata.
     pub metadata: BTreeMap<String, String>,
     /// Compress chunks with zstd.
@@ -221,6 +237,8 @@ impl LogContext {
             gait_json: serde_json::to_string_pretty(gait).unwrap_or_default(),
             config_toml: config.to_toml(),
             urdf_text: setup.urdf_text.clone(),
+            library_json: (!setup.library.is_empty())
+                .then(|| serde_json::to_string(&setup.library).unwrap_or_default()),
             metadata,
             zstd: config.telemetry.log_zstd,
         }
@@ -270,7 +288,14 @@ pub fn start(
             "application/xml",
             context.urdf_text.as_bytes(),
         ),
-    ] {
+    ]
+    .into_iter()
+    .chain(
+        context
+            .library_json
+            .as_ref()
+            .map(|l| (LIBRARY_ATTACHMENT, "application/json", l.as_bytes())),
+    ) {
         writer
             .attach(&mcap::Attachment {
                 log_time: 0,
@@ -372,6 +397,7 @@ struct Channels {
     transitions: u16,
     input: u16,
     command: u16,
+    speed: u16,
 }
 
 fn number() -> Value {
@@ -452,6 +478,7 @@ impl Channels {
             transitions: add(CHANNELS[5], "adam.Transition", &transitions)?,
             input: add(CHANNELS[6], "adam.TickInput", &input)?,
             command: add(CHANNELS[7], "adam.TickCommand", &command)?,
+            speed: add(CHANNELS[8], "adam.Speed", &super::speed_log::speed_schema())?,
         })
     }
 }
@@ -512,7 +539,7 @@ pub fn input_json(record: &TickRecord, joint_names: &[Option<String>; SLOTS]) ->
     m.insert("overrun_streak".into(), json!(input.overrun_streak));
     m.insert(
         "operator".into(),
-        input.operator.map_or(Value::Null, |c| json!(c.name())),
+        input.operator.map_or(Value::Null, |c| json!(c.text())),
     );
     m.insert(
         "imu".into(),
@@ -695,6 +722,15 @@ impl<W: std::io::Write + std::io::Seek> RecordWriter<W> {
             LogRecord::Transition { t_s, from, to } => {
                 let v = json!({"t_s": t_s, "from": from.name(), "to": to.name()});
                 self.put(self.ids.transitions, *t_s, &v)?;
+                Ok(1)
+            }
+            LogRecord::Speed {
+                t_s,
+                speed,
+                true_position_m,
+            } => {
+                let v = super::speed_log::speed_json(*t_s, speed, *true_position_m);
+                self.put(self.ids.speed, *t_s, &v)?;
                 Ok(1)
             }
         }

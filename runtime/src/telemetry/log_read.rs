@@ -198,7 +198,22 @@ impl TopLevel {
             &origin("gait.json"),
         )?;
         let urdf = self.attachment_text(path, "robot.urdf")?.to_string();
-        crate::Setup::from_parts(config, gait, urdf, &origin("robot.urdf"))
+        let setup = crate::Setup::from_parts(config, gait, urdf, &origin("robot.urdf"))?;
+        let name = crate::telemetry::log::LIBRARY_ATTACHMENT;
+        if !self.attachments.iter().any(|(h, _)| h.name == name) {
+            return Ok(setup);
+        }
+        let text = self.attachment_text(path, name)?;
+        let entries: Vec<serde_json::Value> = serde_json::from_str(text)
+            .map_err(|e| log_err(path, format!("attachment {name} is not a JSON array: {e}")))?;
+        let mut library = Vec::with_capacity(entries.len());
+        let mut origins = Vec::with_capacity(entries.len());
+        for (k, entry) in entries.iter().enumerate() {
+            let o = origin(&format!("{name}[{k}]"));
+            library.push(model::gait::GaitFile::from_json(&entry.to_string(), &o)?);
+            origins.push(o);
+        }
+        setup.with_library(library, &origins)
     }
 
     /// Metadata record `name`, key `key`.

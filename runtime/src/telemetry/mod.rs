@@ -1,7 +1,8 @@
 //! What a run tells the outside: the per-tick [`sample::StateSample`] published over iceoryx2,
 //! the MCAP log ([`log`]: writer thread; [`log_read`]: reading it back; [`salvage`]: the one
 //! way every reader reads, past damage; [`loss`]: what damage took; [`recover`]: a damaged log
-//! rewritten whole) and the deterministic [`replay`] of a log through the controller.
+//! rewritten whole), the deterministic [`replay`] of a log through the controller, and the
+//! treadmill speed control's `/speed` channel ([`speed_log`], read by [`speed_read`]).
 
 pub mod log;
 pub mod log_read;
@@ -10,3 +11,5 @@ pub mod recover;
 pub mod replay;
 pub mod salvage;
 pub mod sample;
+pub mod speed_log;
+pub mod speed_read;

@@ -202,9 +202,9 @@ fn parse_input(
     };
     input.operator = match &v["operator"] {
         Value::Null => None,
-        Value::String(name) => Some(
-            OperatorCommand::from_name(name)
-                .ok_or_else(|| f.err("operator", &format!("is unknown ({name})")))?,
+        Value::String(text) => Some(
+            OperatorCommand::parse(text)
+                .map_err(|e| f.err("operator", &format!("is `{text}`: {e}")))?,
         ),
         other => return Err(f.err("operator", &format!("is {other} (want a name or null)"))),
     };

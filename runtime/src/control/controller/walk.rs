@@ -51,6 +51,13 @@ impl Controller {
     /// Height of the swing foot above the stance foot at torso pitch `pitch_rad`, m (NaN if the
     /// kinematics fails, which fixed sizes rule out).
     pub(super) fn foot_height_at(&self, pitch_rad: f64, leg_q: &[f64; LEG_SLOTS]) -> f64 {
+        self.feet_offset_at(pitch_rad, leg_q)[1]
+    }
+
+    /// The swing foot relative to the stance foot at torso pitch `pitch_rad`, [x (+ forward),
+    /// z], m (NaN if the kinematics fails, which fixed sizes rule out). At an impact, x is the
+    /// step's length.
+    pub(super) fn feet_offset_at(&self, pitch_rad: f64, leg_q: &[f64; LEG_SLOTS]) -> [f64; 2] {
         let mut q = self.q_template;
         q[2] = pitch_rad;
         for k in 0..LEG_SLOTS {
@@ -60,13 +67,15 @@ impl Controller {
         self.model
             .body_poses(&q[..self.dof])
             .map(|st| {
-                self.model
-                    .frame_position_in(&st, self.legs.side(swing).foot)[1]
-                    - self
-                        .model
-                        .frame_position_in(&st, self.legs.side(self.stance).foot)[1]
+                let a = self
+                    .model
+                    .frame_position_in(&st, self.legs.side(swing).foot);
+                let b = self
+                    .model
+                    .frame_position_in(&st, self.legs.side(self.stance).foot);
+                [a[0] - b[0], a[1] - b[1]]
             })
-            .unwrap_or(f64::NAN)
+            .unwrap_or([f64::NAN; 2])
     }
 
     /// The torso pitch at which both feet are at the same height for these joint angles (both

@@ -1,0 +1,106 @@
+//! The `[speed]` section: the step-to-step speed regulator and the belt-position loop
+//! (`runtime::control::speed`).
+
+use crate::RuntimeError;
+use serde::{Deserialize, Serialize};
+
+/// Speed control on a treadmill: how the walking speed follows the belt and how the robot is
+/// kept at the belt's centre. Active once a gait library is loaded and a belt speed is known
+/// (an operator `belt` command).
+///
+/// At each impact k (the Poincaré section), with the last step's measured speed v_k, the
+/// belt speed b set by the operator and the estimated position p on the belt (+ forward):
+/// ```text
+/// v_cmd = clamp(b + offset − position_gain_per_s · p, library range)
+/// e_k   = v_cmd − v_k             (speed error of the last stride: the last two steps)
+/// I    += integral_gain · e_k                           (|I| ≤ integral_limit_mps)
+/// σ     = clamp(v_cmd + speed_gain · e_k + I, library range,
+///               σ_prev ± max_change_per_step_mps)          (the library gait of the next step)
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpeedConfig {
+    /// Position loop: commanded speed per metre of position on the belt, (m/s)/m = 1/s.
+    pub position_gain_per_s: f64,
+    /// Proportional gain of the step-to-step speed regulator (library speed per speed error).
+    pub speed_gain: f64,
+    /// Integral gain of the regulator, per step.
+    pub integral_gain: f64,
+    /// The regulator's integral stays within ± this, m/s.
+    pub integral_limit_mps: f64,
+    /// The library speed changes by at most this much from one step to the next, m/s: each
+    /// switch starts the new gait close to its own orbit.
+    pub max_change_per_step_mps: f64,
+    /// Where the position on the belt comes from: leg odometry (the belt speed set by the
+    /// operator integrated against the measured steps).
+    #[serde(default)]
+    pub position_source: PositionSource,
+    /// The gait library file ([`model::library::GaitLibrary`]), relative to the config file's
+    /// folder (absent: no library, speed control off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub library: Option<String>,
+}
+
+/// Where the robot's position along the belt comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PositionSource {
+    /// Leg odometry: each step adds its measured length and subtracts the belt travel.
+    #[default]
+    Odometry,
+}
+
+impl Default for SpeedConfig {
+    fn default() -> Self {
+        Self {
+            position_gain_per_s: 0.3,
+            speed_gain: 0.5,
+            integral_gain: 0.1,
+            integral_limit_mps: 0.1,
+            max_change_per_step_mps: 0.02,
+            position_source: PositionSource::Odometry,
+            library: None,
+        }
+    }
+}
+
+impl SpeedConfig {
+    /// Finite, non-negative gains and limit; errors name `origin`, the field and the value.
+    pub fn validate(&self, origin: &str) -> crate::Result<()> {
+        for (field, v) in [
+            ("speed.position_gain_per_s", self.position_gain_per_s),
+            ("speed.speed_gain", self.speed_gain),
+            ("speed.integral_gain", self.integral_gain),
+            ("speed.integral_limit_mps", self.integral_limit_mps),
+            (
+                "speed.max_change_per_step_mps",
+                self.max_change_per_step_mps,
+            ),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(RuntimeError::InvalidField {
+                    origin: origin.to_string(),
+                    field: field.into(),
+                    value: v.to_string(),
+                    reason: "must be finite and not negative".into(),
+                });
+            }
+        }
+        // Gains that large overshoot every step (the loop is discrete: one update per step).
+        for (field, v) in [
+            ("speed.speed_gain", self.speed_gain),
+            ("speed.integral_gain", self.integral_gain),
+        ] {
+            if v >= 3.0 {
+                return Err(RuntimeError::InvalidField {
+                    origin: origin.to_string(),
+                    field: field.into(),
+                    value: v.to_string(),
+                    reason: "must be below 3 (the walked speed responds to the library speed with a gain of about 0.4: a step-to-step gain of 3 or more overshoots each step)"
+                        .into(),
+                });
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,47 @@
+//! The `/speed` channel: one message per step while treadmill speed control runs (the
+//! controller's [`SpeedStatus`] at each impact, with the simulator's true position on the belt
+//! where it is known). Read back by [`crate::telemetry::speed_read`].
+//!
+//! Fields: `t_s`, `belt_mps` (set by the operator), `offset_mps`, `requested_mps` (before the
+//! clamp to the library's range), `commanded_mps`, `clamped`, `step_speed_mps` (measured),
+//! `step_length_m`, `step_duration_s`, `position_m` (estimated, + forward),
+//! `true_position_m` (`null` without ground truth), `library_mps` (the gait in use for the next
+//! step), `integral_mps`.
+
+use crate::control::SpeedStatus;
+use serde_json::{json, Value};
+
+/// The channel's topic.
+pub const SPEED_TOPIC: &str = "/speed";
+
+/// The JSON schema of a `/speed` message.
+pub fn speed_schema() -> Value {
+    let number = || json!({"type": ["number", "null"]});
+    json!({"type": "object", "properties": {
+        "t_s": number(), "belt_mps": number(), "offset_mps": number(),
+        "requested_mps": number(), "commanded_mps": number(), "clamped": {"type": "boolean"},
+        "step_speed_mps": number(), "step_length_m": number(), "step_duration_s": number(),
+        "position_m": number(), "true_position_m": number(), "library_mps": number(),
+        "integral_mps": number()}})
+}
+
+/// A finite number, or `null`.
+fn num(x: f64) -> Value {
+    if x.is_finite() {
+        json!(x)
+    } else {
+        Value::Null
+    }
+}
+
+/// The `/speed` message of one impact.
+pub fn speed_json(t_s: f64, s: &SpeedStatus, true_position_m: Option<f64>) -> Value {
+    json!({
+        "t_s": t_s, "belt_mps": num(s.belt_mps), "offset_mps": num(s.offset_mps),
+        "requested_mps": num(s.requested_mps), "commanded_mps": num(s.commanded_mps),
+        "clamped": s.clamped, "step_speed_mps": num(s.step_speed_mps),
+        "step_length_m": num(s.step_length_m), "step_duration_s": num(s.step_duration_s),
+        "position_m": num(s.position_m), "true_position_m": true_position_m.map_or(Value::Null, num),
+        "library_mps": num(s.library_mps), "integral_mps": num(s.integral_mps),
+    })
+}
