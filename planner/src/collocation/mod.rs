@@ -75,6 +75,7 @@ mod problem;
 mod residuals;
 mod sparsity;
 
+pub use constraints::{ConstraintGroup, ConstraintGroups};
 pub use cost::FEASIBILITY_TORQUE_WEIGHT;
 pub use layout::{Layout, ACC_SCALE, TORQUE_SCALE};
 pub use problem::{Codesign, HzdProblem};

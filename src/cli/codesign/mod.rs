@@ -1,7 +1,12 @@
 //! `adam codesign [sweep]`: the thigh and shin lengths co-designed with the gait (paper Sec.
 //! III), compared with gaits at fixed designs; the sweep is the paper's convergence study.
 
+mod audit;
+mod landscape;
 mod report;
+
+pub(crate) use audit::audit;
+pub(crate) use landscape::{landscape, LandscapeRequest, StartArg};
 
 use crate::cli::paths::{relative_path, writable, OUT_DIR};
 use crate::cli::plan::{gait_check, progress_printer};
@@ -48,6 +53,37 @@ pub(crate) enum CodesignStudy {
         #[arg(long)]
         grid: Option<usize>,
         /// Output folder (default: `out/codesign-sweep`).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
+    /// The cost landscape: the gait optimized at every design of an n × n grid of the design
+    /// box, in parallel; writes landscape.png/.svg (a heat map with the co-design optimum and
+    /// the convergence study's endpoints), landscape.csv and activity.md (which constraints
+    /// hold the co-design optimum, with their multipliers).
+    Landscape {
+        /// Grid size n (n × n solves, at least 2), overriding `[codesign] landscape_grid`.
+        #[arg(long)]
+        grid: Option<usize>,
+        /// Output folder (default: `out/codesign-landscape`).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+        /// The convergence study's sweep.json (from `adam codesign sweep`) whose endpoints to
+        /// draw; without it the study is run and its sweep.json written beside the figure.
+        #[arg(long)]
+        sweep: Option<PathBuf>,
+        /// Where each grid solve starts: from the gait at the initial design (`initial`), or
+        /// ring by ring from its inner neighbour's solution (`neighbours`).
+        #[arg(long, value_enum, default_value = "initial")]
+        start: StartArg,
+    },
+    /// The constraint audit: the gait with and without each constraint that is ours, not the
+    /// paper's (swing clearance envelope, impact-velocity margin, lift-off, pitch limits), from
+    /// the baseline optimum and from scratch; writes audit.md.
+    Audit {
+        /// The robot (default: ADAM generated at the config's initial lengths).
+        #[arg(long)]
+        urdf: Option<PathBuf>,
+        /// Output folder (default: `out/codesign-audit`).
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
@@ -148,14 +184,7 @@ pub(crate) fn convergence_sweep(
 ) -> Result<()> {
     use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
     let (config, inertia) = (&args.config, args.inertia);
-    for (flag, given) in [
-        ("--out-gait", args.out_gait.is_some()),
-        ("--out-urdf", args.out_urdf.is_some()),
-    ] {
-        if given {
-            bail!("{flag} is not used by `adam codesign sweep` (its outputs go to --out-dir)");
-        }
-    }
+    refuse_gait_outputs(args, "sweep")?;
     let mut cfg = codesign_config(config, inertia)?;
     if let Some(grid) = grid {
         if !(1..=planner::config::MAX_SWEEP_GRID).contains(&grid) {
@@ -171,6 +200,7 @@ pub(crate) fn convergence_sweep(
     let out_dir = out_dir.unwrap_or(&default_dir);
     let outputs = [
         "sweep.csv",
+        "sweep.json",
         "table.md",
         "convergence.png",
         "convergence.svg",
@@ -219,6 +249,7 @@ pub(crate) fn convergence_sweep(
     .to_string();
     let csv_path = out_dir.join("sweep.csv");
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    planner::codesign::save_sweep(&out_dir.join("sweep.json"), &runs)?;
     // Table II: mean ± std over the runs that are not local minima.
     let good: Vec<&planner::codesign::SweepOutcome> = runs
         .iter()
@@ -278,9 +309,22 @@ pub(crate) fn convergence_sweep(
         (PAPER_OPTIMUM_M[0], PAPER_OPTIMUM_M[1]),
     )?;
     println!(
-        "\nwrote {0}/sweep.csv, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
+        "\nwrote {0}/sweep.csv, {0}/sweep.json, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
         out_dir.display()
     );
+    Ok(())
+}
+
+/// A study writes no gait or URDF: `--out-gait` and `--out-urdf` are refused by name.
+fn refuse_gait_outputs(args: &CodesignArgs, study: &str) -> Result<()> {
+    for (flag, given) in [
+        ("--out-gait", args.out_gait.is_some()),
+        ("--out-urdf", args.out_urdf.is_some()),
+    ] {
+        if given {
+            bail!("{flag} is not used by `adam codesign {study}` (its outputs go to --out-dir)");
+        }
+    }
     Ok(())
 }
 
