@@ -36,6 +36,12 @@ pub struct GaitConfig {
     pub step_length_m: [f64; 2],
     /// Step duration range, s (paper Table I: 0.6–0.9).
     pub step_duration_s: [f64; 2],
+    /// Mean forward speed d/T of the step, m/s: `[lo, hi]`, a band, or `lo = hi` for one
+    /// speed; absent, the speed is free. An essential constraint on the step length d and
+    /// duration T, written linearly (d − lo·T ≥ 0, hi·T − d ≥ 0; d − v·T = 0 for one speed) so
+    /// its derivatives are exact constants.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed_mps: Option<[f64; 2]>,
     /// Swing-foot height at mid-step, at least, m.
     pub swing_clearance_m: f64,
     /// Downward swing-foot velocity at impact, at least, m/s.
@@ -48,6 +54,52 @@ pub struct GaitConfig {
     pub min_normal_force_n: f64,
     /// Torso pitch range, rad.
     pub pitch_limits_rad: [f64; 2],
+}
+
+impl GaitConfig {
+    /// The speeds a step within `step_length_m` and `step_duration_s` can have, m/s:
+    /// [shortest / longest, longest / shortest].
+    pub fn reachable_speed_mps(&self) -> [f64; 2] {
+        [
+            self.step_length_m[0] / self.step_duration_s[1],
+            self.step_length_m[1] / self.step_duration_s[0],
+        ]
+    }
+
+    /// Checks `speed_mps` (if given): finite, 0 < lo ≤ hi, and reachable by some step within
+    /// the length and duration bounds (an error names both fields). The length and duration
+    /// ranges must already be valid.
+    pub fn check_speed(&self, origin: &str) -> Result<()> {
+        let Some([lo, hi]) = self.speed_mps else {
+            return Ok(());
+        };
+        let bad = |value: String, reason: String| PlannerError::InvalidField {
+            origin: origin.to_string(),
+            field: "gait.speed_mps".into(),
+            value,
+            reason,
+        };
+        let shown = format!("[{lo}, {hi}]");
+        if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+            return Err(bad(
+                shown,
+                "must be [lower, upper] m/s with 0 < lower ≤ upper (lower = upper for one speed)"
+                    .into(),
+            ));
+        }
+        let [slowest, fastest] = self.reachable_speed_mps();
+        if hi < slowest || lo > fastest {
+            let [d_lo, d_hi] = self.step_length_m;
+            let [t_lo, t_hi] = self.step_duration_s;
+            return Err(bad(
+                shown,
+                format!(
+                    "no step can reach it: gait.step_length_m = [{d_lo}, {d_hi}] and gait.step_duration_s = [{t_lo}, {t_hi}] allow {slowest:.4}–{fastest:.4} m/s"
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// The cost: weighted mechanical cost of transport.
@@ -272,6 +324,7 @@ impl Default for PlannerConfig {
                 stance_leg: Side::Right,
                 step_length_m: [0.15, 0.35],
                 step_duration_s: [0.6, 0.9],
+                speed_mps: None,
                 swing_clearance_m: 0.03,
                 impact_velocity_mps: 0.01,
                 liftoff_velocity_mps: 0.0,
@@ -378,6 +431,7 @@ impl PlannerConfig {
         range("gait.step_duration_s", g.step_duration_s)?;
         positive("gait.step_duration_s[0]", g.step_duration_s[0])?;
         range("gait.pitch_limits_rad", g.pitch_limits_rad)?;
+        g.check_speed(origin)?;
         nonneg("gait.swing_clearance_m", g.swing_clearance_m)?;
         nonneg("gait.impact_velocity_mps", g.impact_velocity_mps)?;
         nonneg("gait.liftoff_velocity_mps", g.liftoff_velocity_mps)?;

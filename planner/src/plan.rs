@@ -401,6 +401,9 @@ pub fn plan_gait(
         ((step0 - 0.05).max(s_lo), d_lo + 2.0 * (d_hi - d_lo) / 3.0),
         (step0, 0.5 * (d_lo + d_hi)),
     ];
+    // With a speed asked for, each start keeps its duration and takes the step length of the
+    // band's middle speed (the duration moves instead where the length hits its bounds).
+    let starts = starts.map(|(step, duration)| start_at_speed(config, step, duration));
     let mut capped = config.clone();
     capped.solver.max_iterations = config.solver.max_iterations.min(FEASIBILITY_MAX_ITERATIONS);
     // The dropped starts' work, counted in the stage's figures.
@@ -474,6 +477,21 @@ pub fn plan_gait(
         feasibility_size: Some(feasibility_size),
         setup_time_s,
     })
+}
+
+/// A hand-built start's (step length m, duration s) moved onto `gait.speed_mps`'s middle
+/// speed, within the length and duration bounds; unchanged without a speed.
+pub fn start_at_speed(config: &PlannerConfig, step_m: f64, duration_s: f64) -> (f64, f64) {
+    let g = &config.gait;
+    let Some([lo, hi]) = g.speed_mps else {
+        return (step_m, duration_s);
+    };
+    let v = 0.5 * (lo + hi);
+    let [s_lo, s_hi] = g.step_length_m;
+    let [t_lo, t_hi] = g.step_duration_s;
+    let step = (v * duration_s).clamp(s_lo, s_hi);
+    let duration = (step / v).clamp(t_lo, t_hi);
+    (step, duration)
 }
 
 /// The planned torque of each output's joint at every collocation point, by phase: the

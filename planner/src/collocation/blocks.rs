@@ -22,6 +22,10 @@ pub(super) enum Kind {
     SwingEnd,
     /// Impact and periodicity.
     Impact,
+    /// The step's mean speed against `gait.speed_mps` = [lo, hi]: d − lo·T ≥ 0 and
+    /// hi·T − d ≥ 0 (one row d − v·T = 0 when lo = hi). Linear in T and d: its Jacobian is
+    /// constant and its Hessian zero. Only when the config asks for a speed.
+    Speed,
     /// τ at the first and last point (equalities, not fixed bounds: fixed variables make an
     /// interior point's barrier ill-conditioned).
     TauEnds,
@@ -41,6 +45,7 @@ impl Kind {
             Kind::SwingEnd => "swing foot at impact (guard, step length, descent)".into(),
             Kind::Impact => "impact, periodicity, impulse and lift-off".into(),
             Kind::TauEnds => "phase at the step ends".into(),
+            Kind::Speed => "step speed (gait.speed_mps)".into(),
         }
     }
 }

@@ -158,6 +158,18 @@ impl HzdProblem {
         lo.extend([0.0, 0.0, 0.0, liftoff]);
         hi.extend([inf, inf, inf, inf]);
         self.add(Kind::Impact, vars, &lo, &hi);
+        // Speed: linear rows in T and d (a quotient d/T would make the Hessian non-zero and
+        // the rows' scale depend on T).
+        match g.speed_mps {
+            Some([v_lo, v_hi]) if v_lo == v_hi => {
+                self.add(Kind::Speed, vec![l.duration(), l.length()], &[0.0], &[0.0]);
+            }
+            Some(_) => {
+                let vars = vec![l.duration(), l.length()];
+                self.add(Kind::Speed, vars, &[0.0, 0.0], &[inf, inf]);
+            }
+            None => {}
+        }
         // Co-design: every block that evaluates the model also sees the two lengths.
         if l.design > 0 {
             let dv = [l.design_var(0), l.design_var(1)];

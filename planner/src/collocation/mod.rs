@@ -23,6 +23,9 @@
 //! - **impact and periodicity** (the HZD condition, with y = ẏ = 0 at the start):
 //!   x_0 = relabel(Δ(x_2N)); the impact impulse inside the friction cone; the old stance foot
 //!   leaves the ground (upward velocity after impact);
+//! - **speed** (only if `gait.speed_mps` = [lo, hi] is given): d − lo·T ≥ 0 and hi·T − d ≥ 0,
+//!   or d − v·T = 0 for one speed: linear, so exact with constant derivatives and scaled like
+//!   the step length;
 //! - bounds: joint limits, A1 torque and speed limits, torso pitch, Table I (d, T).
 //!
 //! Cost: the weighted mechanical cost of transport Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with

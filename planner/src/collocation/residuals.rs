@@ -1,6 +1,6 @@
 //! What each constraint block computes at its local variables: pinned-stance dynamics and
 //! contact forces, phase, virtual constraints, Hermite–Simpson defects, power slacks, swing
-//! foot, impact and periodicity.
+//! foot, impact and periodicity, step speed.
 
 use super::blocks::Kind;
 use super::layout::{ACC_SCALE, TORQUE_SCALE};
@@ -184,6 +184,15 @@ impl HzdProblem {
             Kind::TauEnds => {
                 out[0] = z[0];
                 out[1] = z[1];
+            }
+            Kind::Speed => {
+                // z = [T, d]; the rows' bounds are set in `build_blocks`.
+                let (duration, length) = (z[0], z[1]);
+                let [lo, hi] = g.speed_mps.unwrap_or([0.0, 0.0]);
+                out[0] = length - duration * lo;
+                if let Some(upper) = out.get_mut(1) {
+                    *upper = duration * hi - length;
+                }
             }
             Kind::Power(_) => {
                 out[0] = z[0] - z[1] - z[2] * TORQUE_SCALE * z[3];
