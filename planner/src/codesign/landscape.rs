@@ -21,6 +21,9 @@ use crate::plan::{self, PlannedGait};
 use crate::Result;
 use std::time::Instant;
 
+/// Stack of each landscape worker, bytes (a main thread's 8 MiB).
+const WORKER_STACK_BYTES: usize = 8 << 20;
+
 /// Where the grid's solves start from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LandscapeStart {
@@ -162,7 +165,14 @@ pub fn landscape(
         (p, r.ok().map(|s| s.1))
     };
     let mut points: Vec<Option<LandscapePoint>> = vec![None; n * n];
-    match start {
+    // Whole solves on the workers: a pool of its own with the stack of a main thread (a
+    // solve's fallback to ripopt overflowed a default 2 MiB worker stack in a test run
+    // beside another solve).
+    let pool = rayon::ThreadPoolBuilder::new()
+        .stack_size(WORKER_STACK_BYTES)
+        .build()
+        .map_err(|e| crate::PlannerError::Solver(format!("the landscape's thread pool: {e}")))?;
+    pool.install(|| match start {
         LandscapeStart::Initial => {
             let solved: Vec<LandscapePoint> = (0..n * n)
                 .into_par_iter()
@@ -225,7 +235,7 @@ pub fn landscape(
                 }
             }
         }
-    }
+    });
     let points = points
         .into_iter()
         .enumerate()

@@ -296,6 +296,8 @@ pub enum ConstraintGroup {
     Pitch,
     /// Torso pitch rate, rad/s (±10).
     PitchRate,
+    /// The step's mean speed `gait.speed_mps`: rows d − v·T, m.
+    Speed,
     /// Bounds that only keep the search finite: Bézier coefficients within the joint limits,
     /// θ± within ±1 rad, power slacks below the largest motor power.
     SearchBox,
@@ -303,7 +305,7 @@ pub enum ConstraintGroup {
 
 impl ConstraintGroup {
     /// Every group, in report order.
-    pub const ALL: [ConstraintGroup; 16] = [
+    pub const ALL: [ConstraintGroup; 17] = [
         Self::StepLength,
         Self::StepDuration,
         Self::ThighLength,
@@ -319,6 +321,7 @@ impl ConstraintGroup {
         Self::Liftoff,
         Self::Pitch,
         Self::PitchRate,
+        Self::Speed,
         Self::SearchBox,
     ];
 
@@ -340,6 +343,7 @@ impl ConstraintGroup {
             Self::Liftoff => "old stance foot lift-off (m/s)",
             Self::Pitch => "torso pitch (rad)",
             Self::PitchRate => "torso pitch rate (rad/s)",
+            Self::Speed => "step speed rows d − v·T (m)",
             Self::SearchBox => "search box: α, θ±, power slacks",
         }
     }
@@ -352,6 +356,7 @@ impl ConstraintGroup {
             Self::StepLength | Self::StepDuration | Self::ThighLength | Self::ShinLength => {
                 "Table I"
             }
+            Self::Speed => "essential (speed)",
             Self::Torque
             | Self::JointSpeed
             | Self::JointAngle
@@ -412,6 +417,7 @@ impl HzdProblem {
                     })
                     .collect(),
                 Kind::SwingHeight => vec![Some(G::SwingClearance)],
+                Kind::Speed => vec![Some(G::Speed); b.n_out],
                 Kind::SwingEnd => vec![None, Some(G::ImpactVelocity)],
                 Kind::Impact => (0..b.n_out)
                     .map(|r| match r.checked_sub(2 * nq) {

@@ -4,6 +4,7 @@
 mod audit;
 mod landscape;
 mod report;
+mod speeds;
 
 pub(crate) use audit::audit;
 pub(crate) use landscape::{landscape, LandscapeRequest, StartArg};
@@ -37,6 +38,12 @@ pub(crate) struct CodesignArgs {
     /// Output URDF of the co-designed robot (default: `out/robots/adam_codesign.urdf`).
     #[arg(long)]
     out_urdf: Option<PathBuf>,
+    /// Co-design one robot for the gaits of several speeds together, m/s, comma-separated
+    /// (e.g. `0.20,0.25,0.30`): one NLP with shared lengths minimizing the mean cost of
+    /// transport; writes the URDF and one gait per speed beside `--out-gait`
+    /// (`<stem>_<speed>.json`), and compares with the single-speed co-design at each speed.
+    #[arg(long, value_delimiter = ',')]
+    speeds: Option<Vec<f64>>,
     /// `sweep`: the convergence study instead of one co-design.
     #[command(subcommand)]
     pub(crate) study: Option<CodesignStudy>,
@@ -114,6 +121,9 @@ fn codesign_config(
 /// `adam codesign`: co-designs, writes the URDF and gait, prints the outer iterations and the
 /// comparison with fixed designs, and checks the gait.
 pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
+    if let Some(speeds) = &args.speeds {
+        return speeds::codesign_speeds(args, speeds);
+    }
     let CodesignArgs {
         config,
         inertia,
@@ -317,6 +327,9 @@ pub(crate) fn convergence_sweep(
 
 /// A study writes no gait or URDF: `--out-gait` and `--out-urdf` are refused by name.
 fn refuse_gait_outputs(args: &CodesignArgs, study: &str) -> Result<()> {
+    if args.speeds.is_some() {
+        bail!("--speeds is not used by `adam codesign {study}` (it is a co-design of its own)");
+    }
     for (flag, given) in [
         ("--out-gait", args.out_gait.is_some()),
         ("--out-urdf", args.out_urdf.is_some()),
