@@ -165,6 +165,23 @@ fn dispatch(cli: Cli) -> Result<()> {
             Some(CodesignStudy::Sweep { grid, out_dir }) => {
                 codesign::convergence_sweep(&args, *grid, out_dir.as_deref())
             }
+            Some(CodesignStudy::Landscape {
+                grid,
+                out_dir,
+                sweep,
+                start,
+            }) => codesign::landscape(
+                &args,
+                &codesign::LandscapeRequest {
+                    grid: *grid,
+                    out_dir: out_dir.as_deref(),
+                    sweep: sweep.as_deref(),
+                    start: *start,
+                },
+            ),
+            Some(CodesignStudy::Audit { urdf, out_dir }) => {
+                codesign::audit(&args, urdf.as_deref(), out_dir.as_deref())
+            }
         },
         Command::GenerateUrdf(args) => model::write_urdf(args),
     }

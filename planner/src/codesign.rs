@@ -18,9 +18,27 @@
 //!   the model is regenerated at the new lengths and the solve repeated, warm-started, until no
 //!   length moves more than δ.
 //!
+//! Submodules: `activity` (which constraints hold an optimum, with their multipliers),
+//! `landscape` (the optimal cost over a grid of the design box), `audit` (the gait with and
+//! without each constraint that is ours), `speeds` (one design for the gaits of several speeds,
+//! one NLP), `endpoints` (the sweep's
+//! endpoints as a JSON file, for the landscape figure).
+//!
 //! The objective during a co-design solve normalises by the total mass of the model the solve
 //! started from (the leg masses change a few percent with the lengths); the final polish solve,
 //! at the final model, reports the exact cost of transport.
+
+mod activity;
+mod audit;
+mod endpoints;
+mod landscape;
+mod speeds;
+
+pub use activity::{activity, Activity, BoundSide, GroupActivity, ACTIVE_SLACK};
+pub use audit::{audit, audit_variants, Audit, AuditRow, AuditSolve, AuditVariant, WIDE_PITCH_RAD};
+pub use endpoints::{load_sweep_endpoints, save_sweep, SweepEndpoint};
+pub use landscape::{landscape, Landscape, LandscapePoint, LandscapeStart};
+pub use speeds::{codesign_speeds, MultiSpeedProblem, MultiSpeedResult};
 
 use crate::biped::PlanarBiped;
 use crate::collocation::{Codesign, HzdProblem};
@@ -61,6 +79,9 @@ pub struct CodesignResult {
     pub outer: Vec<OuterIteration>,
     /// Whether the outer loop met its tolerance (always, for exact coupling).
     pub converged: bool,
+    /// The constraints that hold the last co-design solve's optimum, with their multipliers
+    /// ([`activity`]); `None` if that solve did not end usable.
+    pub activity: Option<Activity>,
     /// Wall time of everything, s.
     pub wall_time_s: f64,
 }
@@ -121,6 +142,26 @@ pub fn codesign_from(
     )
 }
 
+/// One run of the convergence study ([`codesign_from`] without the gait file's extras: no
+/// feed-forward table, and with exact coupling no polish when the co-design optimum already
+/// holds on the regenerated robot); its [`CodesignResult::activity`] says which constraints
+/// hold the optimum.
+pub fn codesign_study_run(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    model_lengths: [f64; 2],
+    start_lengths: [f64; 2],
+) -> Result<CodesignResult> {
+    codesign_run(
+        config,
+        "robot.urdf",
+        initial,
+        [model_lengths, start_lengths],
+        true,
+        &mut |_| {},
+    )
+}
+
 /// Largest constraint or bound violation of an exactly coupled co-design optimum on the
 /// regenerated robot for which a convergence-study run reports it without the polish solve
 /// (the solver's own constraint tolerance). Measured: 6.3e-9.
@@ -157,6 +198,7 @@ fn codesign_run(
     // the model is regenerated the multipliers did not help, 126 iterations against 119 from
     // 0.24/0.25 m.)
     let mut warm: Option<(nlp::WarmStart, f64)> = None;
+    let mut last_activity = None;
     for _ in 0..c.max_outer_iterations {
         let mass_kg = model.total_mass_kg();
         let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
@@ -206,6 +248,9 @@ fn codesign_run(
             (problem, attempt)
         };
         warm = Some((attempt.solution.warm_start(), mass_kg));
+        last_activity = attempt
+            .usable
+            .then(|| activity(&problem, &attempt.solution));
         let (xs, report) = attempt.into_result()?;
         let l = &problem.layout;
         let found = [xs[l.design_var(0)], xs[l.design_var(1)]];
@@ -296,6 +341,7 @@ fn codesign_run(
         initial: initial.clone(),
         outer,
         converged,
+        activity: last_activity,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
 }

@@ -166,6 +166,47 @@ pub struct PlannerConfig {
     /// Co-design of the thigh and shin lengths (`adam codesign`).
     #[serde(default)]
     pub codesign: CodesignConfig,
+    /// Switches for the constraints that are ours, not the paper's (`adam codesign audit`).
+    #[serde(default)]
+    pub constraints: ConstraintSwitches,
+}
+
+/// Switches for the constraints the planner adds to the paper's (`[constraints]`; the audit
+/// of planner/CODESIGN.md, "Constraints", solves with and without each). The defaults are the
+/// shipped behaviour. The numeric margins of `[gait]` turn the other added constraints down to
+/// their physical form: `swing_clearance_m = 0` leaves z ≥ 0 for the swing foot,
+/// `impact_velocity_mps = 0` a touchdown that does not rise, `min_normal_force_n = 0` a
+/// unilateral contact.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstraintSwitches {
+    /// Where the swing foot must clear `gait.swing_clearance_m`: over the whole swing under
+    /// the envelope 4s(1−s)·c (`envelope`, the default), or at mid-step only with z ≥ 0
+    /// elsewhere (`midstep`, the paper's "minimum foot clearance").
+    pub clearance_profile: ClearanceProfile,
+    /// The old stance foot must leave the ground after impact (upward velocity at least
+    /// `gait.liftoff_velocity_mps`); false drops the row's bound.
+    pub liftoff: bool,
+}
+
+impl Default for ConstraintSwitches {
+    fn default() -> Self {
+        Self {
+            clearance_profile: ClearanceProfile::Envelope,
+            liftoff: true,
+        }
+    }
+}
+
+/// Where the swing-foot clearance applies (`[constraints] clearance_profile`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ClearanceProfile {
+    /// z ≥ 4s(1−s)·c at every interior point (s = k/2N).
+    #[default]
+    Envelope,
+    /// z ≥ c at the mid-step point only, z ≥ 0 at the other interior points.
+    Midstep,
 }
 
 /// The co-design's settings (paper Sec. III–IV).
@@ -188,6 +229,14 @@ pub struct CodesignConfig {
     /// The convergence study (`adam codesign sweep`).
     #[serde(default)]
     pub sweep: SweepConfig,
+    /// Grid size n of the cost landscape (`adam codesign landscape`: n × n fixed-design solves
+    /// over the design box; `--grid` overrides it), at least 2.
+    #[serde(default = "default_landscape_grid")]
+    pub landscape_grid: usize,
+}
+
+fn default_landscape_grid() -> usize {
+    9
 }
 
 /// The convergence study's settings (`[codesign.sweep]`, `adam codesign sweep`).
@@ -200,6 +249,29 @@ pub struct SweepConfig {
     /// A converged run whose cost of transport is more than this fraction above the best run's
     /// is counted as a worse local minimum (and left out of the table's mean ± std).
     pub local_minimum_margin: f64,
+}
+
+/// The smallest landscape grid (n × n solves): one point is not a landscape.
+pub const MIN_LANDSCAPE_GRID: usize = 2;
+
+/// The largest landscape grid accepted.
+pub const MAX_LANDSCAPE_GRID: usize = 30;
+
+/// Checks a landscape grid size (`--grid`, `[codesign] landscape_grid`), naming `origin` and
+/// `field`.
+pub fn check_landscape_grid(n: usize, origin: &str, field: &str) -> Result<()> {
+    if (MIN_LANDSCAPE_GRID..=MAX_LANDSCAPE_GRID).contains(&n) {
+        return Ok(());
+    }
+    Err(PlannerError::InvalidField {
+        origin: origin.into(),
+        field: field.into(),
+        value: n.to_string(),
+        reason: format!(
+            "a landscape needs {MIN_LANDSCAPE_GRID}..={MAX_LANDSCAPE_GRID} points per side \
+             (n × n fixed-design solves)"
+        ),
+    })
 }
 
 /// The largest sweep grid accepted (n × n co-designs).
@@ -234,6 +306,7 @@ impl Default for CodesignConfig {
             tolerance_m: 1e-3,
             max_outer_iterations: 10,
             sweep: SweepConfig::default(),
+            landscape_grid: default_landscape_grid(),
         }
     }
 }
@@ -269,6 +342,7 @@ impl Default for PlannerConfig {
                 cost_stage_mu_init: DEFAULT_COST_STAGE_MU_INIT,
             },
             codesign: CodesignConfig::default(),
+            constraints: ConstraintSwitches::default(),
         }
     }
 }
@@ -405,6 +479,7 @@ impl PlannerConfig {
                 &format!("must be in 1..={MAX_SWEEP_GRID} (n × n co-designs)"),
             ));
         }
+        check_landscape_grid(c.landscape_grid, origin, "codesign.landscape_grid")?;
         nonneg(
             "codesign.sweep.local_minimum_margin",
             c.sweep.local_minimum_margin,

@@ -499,3 +499,169 @@ where
         .map_err(err)?;
     Ok(())
 }
+
+/// The cost landscape over the design box: the optimal cost of a fixed-design gait at every
+/// grid point, with the co-design optimum and the convergence study's endpoints on it.
+pub struct HeatMap<'a> {
+    /// The grid's thigh lengths (x), m.
+    pub thigh_m: &'a [f64],
+    /// The grid's shin lengths (y), m.
+    pub shin_m: &'a [f64],
+    /// Cost at point (i, j) at `i * shin_m.len() + j` (thigh-major); `None` where the solve
+    /// failed (drawn grey).
+    pub cost: &'a [Option<f64>],
+    /// What the colour is (the colour bar's label).
+    pub cost_label: &'a str,
+    /// The co-design optimum (thigh, shin), m.
+    pub optimum_m: Option<(f64, f64)>,
+    /// The convergence study's endpoints (thigh, shin), m.
+    pub sweep_ends_m: &'a [(f64, f64)],
+}
+
+/// Draws the [`HeatMap`] as `<prefix>.png` and `<prefix>.svg`.
+pub fn landscape(prefix: &Path, map: &HeatMap<'_>) -> Result<()> {
+    png_and_svg!(prefix, (1000, 800), draw_landscape(map))
+}
+
+fn draw_landscape<DB: DrawingBackend>(
+    root: &DrawingArea<DB, plotters::coord::Shift>,
+    map: &HeatMap<'_>,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e}");
+    root.fill(&WHITE).map_err(err)?;
+    let (xs, ys) = (map.thigh_m, map.shin_m);
+    if xs.len() < 2 || ys.len() < 2 || map.cost.len() != xs.len() * ys.len() {
+        return Err(anyhow!(
+            "a landscape figure needs a grid of at least 2 × 2 costs"
+        ));
+    }
+    let finite = map.cost.iter().flatten().copied();
+    let lo = finite.clone().fold(f64::INFINITY, f64::min);
+    let hi = finite.fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = if lo.is_finite() && hi > lo {
+        (lo, hi)
+    } else {
+        (0.0, 1.0)
+    };
+    let (dx, dy) = (xs[1] - xs[0], ys[1] - ys[0]);
+    let (plot, bar) = root.split_horizontally(860);
+    let mut chart = ChartBuilder::on(&plot)
+        .caption(
+            "Optimal cost at fixed designs, co-design optimum and sweep endpoints",
+            ("sans-serif", 20),
+        )
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (xs[0] - dx / 2.0)..(xs[xs.len() - 1] + dx / 2.0),
+            (ys[0] - dy / 2.0)..(ys[ys.len() - 1] + dy / 2.0),
+        )
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .x_desc("thigh length (m)")
+        .y_desc("shin length (m)")
+        .label_style(("sans-serif", 16))
+        .axis_desc_style(("sans-serif", 18))
+        .draw()
+        .map_err(err)?;
+    let colour = |c: f64| viridis((c - lo) / (hi - lo));
+    let grey = RGBColor(190, 190, 190);
+    let cells = xs.iter().enumerate().flat_map(|(i, &x)| {
+        ys.iter().enumerate().map(move |(j, &y)| {
+            let fill = match map.cost[i * ys.len() + j] {
+                Some(c) => colour(c),
+                None => grey,
+            };
+            Rectangle::new(
+                [(x - dx / 2.0, y - dy / 2.0), (x + dx / 2.0, y + dy / 2.0)],
+                fill.filled(),
+            )
+        })
+    });
+    chart.draw_series(cells).map_err(err)?;
+    let red = RGBColor(214, 39, 40);
+    if !map.sweep_ends_m.is_empty() {
+        chart
+            .draw_series(
+                map.sweep_ends_m
+                    .iter()
+                    .map(|&p| Circle::new(p, 6, WHITE.stroke_width(2))),
+            )
+            .map_err(err)?
+            .label(format!(
+                "convergence study: {} endpoints",
+                map.sweep_ends_m.len()
+            ))
+            .legend(|(x, y)| Circle::new((x + 10, y), 6, BLACK.stroke_width(2)));
+    }
+    if let Some(o) = map.optimum_m {
+        chart
+            .draw_series([Cross::new(o, 10, red.stroke_width(3))])
+            .map_err(err)?
+            .label(format!("co-design optimum ({:.4}, {:.4}) m", o.0, o.1))
+            .legend(move |(x, y)| Cross::new((x + 10, y), 7, red.stroke_width(3)));
+    }
+    chart
+        .configure_series_labels()
+        .label_font(("sans-serif", 15))
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerLeft)
+        .draw()
+        .map_err(err)?;
+    // The colour bar.
+    let mut scale = ChartBuilder::on(&bar)
+        .margin_top(60)
+        .margin_bottom(65)
+        .margin_right(10)
+        .y_label_area_size(80)
+        .build_cartesian_2d(0.0..1.0, lo..hi)
+        .map_err(err)?;
+    scale
+        .configure_mesh()
+        .disable_mesh()
+        .disable_x_axis()
+        .y_desc(map.cost_label)
+        .y_label_formatter(&|v| format!("{v:.4}"))
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()
+        .map_err(err)?;
+    let steps = 100;
+    scale
+        .draw_series((0..steps).map(|k| {
+            let a = lo + (hi - lo) * k as f64 / steps as f64;
+            let b = lo + (hi - lo) * (k + 1) as f64 / steps as f64;
+            Rectangle::new([(0.0, a), (1.0, b)], colour(0.5 * (a + b)).filled())
+        }))
+        .map_err(err)?;
+    Ok(())
+}
+
+/// Matplotlib's viridis at t ∈ [0, 1] (dark blue, low → yellow, high), linear between nine of
+/// its samples (plotters' colour maps are behind a feature this build leaves out).
+fn viridis(t: f64) -> RGBColor {
+    const SAMPLES: [(u8, u8, u8); 9] = [
+        (68, 1, 84),
+        (71, 44, 122),
+        (59, 81, 139),
+        (44, 113, 142),
+        (33, 144, 141),
+        (39, 173, 129),
+        (92, 200, 99),
+        (170, 220, 50),
+        (253, 231, 37),
+    ];
+    let x = t.clamp(0.0, 1.0) * (SAMPLES.len() - 1) as f64;
+    let k = (x.floor() as usize).min(SAMPLES.len() - 2);
+    let f = x - k as f64;
+    let mix = |a: u8, b: u8| (a as f64 + (b as f64 - a as f64) * f).round() as u8;
+    let (a, b) = (SAMPLES[k], SAMPLES[k + 1]);
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}

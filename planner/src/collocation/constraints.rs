@@ -1,9 +1,12 @@
 //! The transcription's constraint blocks (which variables, which bounds) and the variable
-//! bounds: joint, speed and torque limits, torso pitch, Table I.
+//! bounds: joint, speed and torque limits, torso pitch, Table I; the `[constraints]` switches
+//! of the constraints that are ours; and the reader's grouping of every inequality row and
+//! variable bound ([`ConstraintGroup`], [`HzdProblem::constraint_groups`]).
 
 use super::blocks::{Block, Kind};
 use super::layout::TORQUE_SCALE;
 use super::problem::HzdProblem;
+use crate::config::ClearanceProfile;
 
 impl HzdProblem {
     pub(super) fn add(&mut self, kind: Kind, vars: Vec<usize>, lower: &[f64], upper: &[f64]) {
@@ -87,7 +90,13 @@ impl HzdProblem {
                 let (lo, hi) = if k == last {
                     (0.0, 0.0)
                 } else {
-                    (g.swing_clearance_m * 4.0 * s * (1.0 - s), inf)
+                    match self.config.constraints.clearance_profile {
+                        ClearanceProfile::Envelope => {
+                            (g.swing_clearance_m * 4.0 * s * (1.0 - s), inf)
+                        }
+                        ClearanceProfile::Midstep if 2 * k == last => (g.swing_clearance_m, inf),
+                        ClearanceProfile::Midstep => (0.0, inf),
+                    }
                 };
                 self.add(Kind::SwingHeight, vars, &[lo], &[hi]);
             }
@@ -141,7 +150,12 @@ impl HzdProblem {
         vars.extend(self.point_vars(0, false));
         let mut lo = vec![0.0; 2 * nq];
         let mut hi = vec![0.0; 2 * nq];
-        lo.extend([0.0, 0.0, 0.0, g.liftoff_velocity_mps]);
+        let liftoff = if self.config.constraints.liftoff {
+            g.liftoff_velocity_mps
+        } else {
+            -inf
+        };
+        lo.extend([0.0, 0.0, 0.0, liftoff]);
         hi.extend([inf, inf, inf, inf]);
         self.add(Kind::Impact, vars, &lo, &hi);
         // Speed: linear rows in T and d (a quotient d/T would make the Hessian non-zero and
@@ -245,5 +259,223 @@ impl HzdProblem {
             }
         }
         (lo, hi)
+    }
+}
+
+/// An inequality constraint or variable bound as a reader of the landscape sees it: which
+/// limit it is and whose (the paper's Table I, a physical limit the paper names, or ours).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ConstraintGroup {
+    /// Step length d, m (Table I: 0.15–0.35).
+    StepLength,
+    /// Step duration T, s (Table I: 0.6–0.9).
+    StepDuration,
+    /// Thigh length, m (Table I: the design box).
+    ThighLength,
+    /// Shin length, m (Table I: the design box).
+    ShinLength,
+    /// Motor torques, N·m (A1 limit).
+    Torque,
+    /// Joint speeds, rad/s (A1 limit).
+    JointSpeed,
+    /// Joint angles, rad (the URDF's limits).
+    JointAngle,
+    /// Stance friction cone |λ_x| ≤ μ λ_z, N.
+    FrictionCone,
+    /// Stance normal force λ_z ≥ `min_normal_force_n`, N.
+    NormalForce,
+    /// Impact impulse inside the friction cone and pushing, N·s.
+    ImpactImpulse,
+    /// Swing foot above the clearance profile, m.
+    SwingClearance,
+    /// Downward swing-foot velocity at impact, m/s.
+    ImpactVelocity,
+    /// Old stance foot lifting off after impact, m/s.
+    Liftoff,
+    /// Torso pitch, rad.
+    Pitch,
+    /// Torso pitch rate, rad/s (±10).
+    PitchRate,
+    /// The step's mean speed `gait.speed_mps`: rows d − v·T, m.
+    Speed,
+    /// Bounds that only keep the search finite: Bézier coefficients within the joint limits,
+    /// θ± within ±1 rad, power slacks below the largest motor power.
+    SearchBox,
+}
+
+impl ConstraintGroup {
+    /// Every group, in report order.
+    pub const ALL: [ConstraintGroup; 17] = [
+        Self::StepLength,
+        Self::StepDuration,
+        Self::ThighLength,
+        Self::ShinLength,
+        Self::Torque,
+        Self::JointSpeed,
+        Self::JointAngle,
+        Self::FrictionCone,
+        Self::NormalForce,
+        Self::ImpactImpulse,
+        Self::SwingClearance,
+        Self::ImpactVelocity,
+        Self::Liftoff,
+        Self::Pitch,
+        Self::PitchRate,
+        Self::Speed,
+        Self::SearchBox,
+    ];
+
+    /// What the group is, with its unit.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::StepLength => "step length d (m)",
+            Self::StepDuration => "step duration T (s)",
+            Self::ThighLength => "thigh length (m)",
+            Self::ShinLength => "shin length (m)",
+            Self::Torque => "motor torque (N·m)",
+            Self::JointSpeed => "joint speed (rad/s)",
+            Self::JointAngle => "joint angle limits (rad)",
+            Self::FrictionCone => "stance friction cone (N)",
+            Self::NormalForce => "stance normal force (N)",
+            Self::ImpactImpulse => "impact impulse: cone and push (N·s)",
+            Self::SwingClearance => "swing-foot clearance (m)",
+            Self::ImpactVelocity => "swing-foot descent at impact (m/s)",
+            Self::Liftoff => "old stance foot lift-off (m/s)",
+            Self::Pitch => "torso pitch (rad)",
+            Self::PitchRate => "torso pitch rate (rad/s)",
+            Self::Speed => "step speed rows d − v·T (m)",
+            Self::SearchBox => "search box: α, θ±, power slacks",
+        }
+    }
+
+    /// Whose constraint it is: `Table I`, `physical` (a limit the paper names: friction cone,
+    /// actuator limits, workspace) or `ours` (added by this planner; planner/CODESIGN.md,
+    /// "Constraints").
+    pub fn source(self) -> &'static str {
+        match self {
+            Self::StepLength | Self::StepDuration | Self::ThighLength | Self::ShinLength => {
+                "Table I"
+            }
+            Self::Speed => "essential (speed)",
+            Self::Torque
+            | Self::JointSpeed
+            | Self::JointAngle
+            | Self::FrictionCone
+            | Self::NormalForce
+            | Self::ImpactImpulse => "physical",
+            Self::SwingClearance
+            | Self::ImpactVelocity
+            | Self::Liftoff
+            | Self::Pitch
+            | Self::PitchRate
+            | Self::SearchBox => "ours",
+        }
+    }
+}
+
+/// The group of every inequality row and every bounded variable of a problem
+/// ([`HzdProblem::constraint_groups`]); `None` for equality rows and free variables.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ConstraintGroups {
+    /// One per constraint row.
+    pub rows: Vec<Option<ConstraintGroup>>,
+    /// One per variable.
+    pub variables: Vec<Option<ConstraintGroup>>,
+    /// Factor from a variable's own unit to its group's unit (10 for the scaled torques, else
+    /// 1): a bound's sensitivity per group unit is its multiplier divided by this.
+    pub variable_scale: Vec<f64>,
+}
+
+impl HzdProblem {
+    /// The swing foot's height above the stance foot at points 1..=2N (the last is the guard,
+    /// 0 at a solution), m; empty if the constraints do not evaluate at x.
+    pub fn swing_heights_m(&self, x: &[f64]) -> Vec<f64> {
+        let mut g = vec![0.0; self.lower_g.len()];
+        if crate::nlp::NlpProblem::constraints(self, x, &mut g).is_err() {
+            return Vec::new();
+        }
+        self.blocks
+            .iter()
+            .filter(|b| b.kind == Kind::SwingHeight)
+            .map(|b| g[b.row0])
+            .collect()
+    }
+
+    /// The reader's group of every inequality row and variable bound.
+    pub fn constraint_groups(&self) -> ConstraintGroups {
+        use ConstraintGroup as G;
+        let l = &self.layout;
+        let nq = l.nq;
+        let mut rows = vec![None; self.lower_g.len()];
+        for b in &self.blocks {
+            let groups: Vec<Option<G>> = match b.kind {
+                Kind::Dynamics => (0..b.n_out)
+                    .map(|r| match r.checked_sub(nq) {
+                        Some(0) => Some(G::NormalForce),
+                        Some(_) => Some(G::FrictionCone),
+                        None => None,
+                    })
+                    .collect(),
+                Kind::SwingHeight => vec![Some(G::SwingClearance)],
+                Kind::Speed => vec![Some(G::Speed); b.n_out],
+                Kind::SwingEnd => vec![None, Some(G::ImpactVelocity)],
+                Kind::Impact => (0..b.n_out)
+                    .map(|r| match r.checked_sub(2 * nq) {
+                        Some(3) => Some(G::Liftoff),
+                        Some(_) => Some(G::ImpactImpulse),
+                        None => None,
+                    })
+                    .collect(),
+                _ => vec![None; b.n_out],
+            };
+            for (r, g) in groups.into_iter().enumerate() {
+                let i = b.row0 + r;
+                // Equalities (the guard among the swing heights) belong to no group.
+                rows[i] = g.filter(|_| self.lower_g[i] < self.upper_g[i]);
+            }
+        }
+        let bp = &self.biped;
+        let mut variables = vec![None; l.len()];
+        let mut variable_scale = vec![1.0; l.len()];
+        let is_joint = |c: usize| bp.model.joints.iter().any(|j| j.coordinate == c);
+        for k in 0..l.points() {
+            for (i, &c) in bp.reduced.iter().enumerate() {
+                let joint = is_joint(c);
+                variables[l.q(k) + i] = Some(if joint { G::JointAngle } else { G::Pitch });
+                variables[l.dq(k) + i] = Some(if joint { G::JointSpeed } else { G::PitchRate });
+            }
+            for a in 0..l.nu {
+                variables[l.u(k) + a] = Some(G::Torque);
+                variable_scale[l.u(k) + a] = TORQUE_SCALE;
+                if l.slacks {
+                    variables[l.p(k) + a] = Some(G::SearchBox);
+                    variables[l.n(k) + a] = Some(G::SearchBox);
+                }
+            }
+        }
+        for o in 0..l.m {
+            for jj in 0..=l.degree {
+                variables[l.alpha(o, jj)] = Some(G::SearchBox);
+            }
+        }
+        variables[l.theta_plus()] = Some(G::SearchBox);
+        variables[l.theta_minus()] = Some(G::SearchBox);
+        variables[l.duration()] = Some(G::StepDuration);
+        variables[l.length()] = Some(G::StepLength);
+        if l.design > 0 {
+            variables[l.design_var(0)] = Some(G::ThighLength);
+            variables[l.design_var(1)] = Some(G::ShinLength);
+        }
+        let (lo, hi) = self.bounds();
+        for (i, v) in variables.iter_mut().enumerate() {
+            if !(lo[i].is_finite() || hi[i].is_finite()) {
+                *v = None;
+            }
+        }
+        ConstraintGroups {
+            rows,
+            variables,
+            variable_scale,
+        }
     }
 }

@@ -18,15 +18,19 @@
 //! - **phase** (lifted: τ, τ̇, τ̈ are variables at every point): θ(q) − θ⁺ = τ (θ⁻ − θ⁺) and its
 //!   first and second time derivatives, with τ = 0 at the first point and τ = 1 at the last;
 //! - **swing foot**: z_nsf ≥ c·4s(1−s) at every interior point (s = k/2N, c the mid-step
-//!   clearance: the foot stays clear of the ground, not merely above it), = 0 at the end
+//!   clearance: the foot stays clear of the ground, not merely above it; `[constraints]
+//!   clearance_profile = "midstep"` asks c at mid-step only and z ≥ 0 elsewhere), = 0 at the end
 //!   (the guard) with ż_nsf ≤ −v_impact, x_nsf = d at the end;
 //! - **impact and periodicity** (the HZD condition, with y = ẏ = 0 at the start):
 //!   x_0 = relabel(Δ(x_2N)); the impact impulse inside the friction cone; the old stance foot
-//!   leaves the ground (upward velocity after impact);
+//!   leaves the ground (upward velocity after impact; `[constraints] liftoff = false` drops it);
 //! - **speed** (only if `gait.speed_mps` = [lo, hi] is given): d − lo·T ≥ 0 and hi·T − d ≥ 0,
 //!   or d − v·T = 0 for one speed: linear, so exact with constant derivatives and scaled like
 //!   the step length;
 //! - bounds: joint limits, A1 torque and speed limits, torso pitch, Table I (d, T).
+//!
+//! Which of these the paper states and which are ours: [`ConstraintGroup::source`]
+//! (planner/CODESIGN.md, "Constraints", has the audit of ours).
 //!
 //! Cost: the weighted mechanical cost of transport Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with
 //! |u q̇| = p + n, p − n = u q̇, p, n ≥ 0 (slack variables), integrated with Simpson's rule.
@@ -78,6 +82,7 @@ mod problem;
 mod residuals;
 mod sparsity;
 
+pub use constraints::{ConstraintGroup, ConstraintGroups};
 pub use cost::FEASIBILITY_TORQUE_WEIGHT;
 pub use layout::{Layout, ACC_SCALE, TORQUE_SCALE};
 pub use problem::{Codesign, HzdProblem};

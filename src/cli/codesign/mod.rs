@@ -1,7 +1,13 @@
 //! `adam codesign [sweep]`: the thigh and shin lengths co-designed with the gait (paper Sec.
 //! III), compared with gaits at fixed designs; the sweep is the paper's convergence study.
 
+mod audit;
+mod landscape;
 mod report;
+mod speeds;
+
+pub(crate) use audit::audit;
+pub(crate) use landscape::{landscape, LandscapeRequest, StartArg};
 
 use crate::cli::paths::{relative_path, writable, OUT_DIR};
 use crate::cli::plan::{gait_check, progress_printer};
@@ -32,6 +38,12 @@ pub(crate) struct CodesignArgs {
     /// Output URDF of the co-designed robot (default: `out/robots/adam_codesign.urdf`).
     #[arg(long)]
     out_urdf: Option<PathBuf>,
+    /// Co-design one robot for the gaits of several speeds together, m/s, comma-separated
+    /// (e.g. `0.20,0.25,0.30`): one NLP with shared lengths minimizing the mean cost of
+    /// transport; writes the URDF and one gait per speed beside `--out-gait`
+    /// (`<stem>_<speed>.json`), and compares with the single-speed co-design at each speed.
+    #[arg(long, value_delimiter = ',')]
+    speeds: Option<Vec<f64>>,
     /// `sweep`: the convergence study instead of one co-design.
     #[command(subcommand)]
     pub(crate) study: Option<CodesignStudy>,
@@ -48,6 +60,37 @@ pub(crate) enum CodesignStudy {
         #[arg(long)]
         grid: Option<usize>,
         /// Output folder (default: `out/codesign-sweep`).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+    },
+    /// The cost landscape: the gait optimized at every design of an n × n grid of the design
+    /// box, in parallel; writes landscape.png/.svg (a heat map with the co-design optimum and
+    /// the convergence study's endpoints), landscape.csv and activity.md (which constraints
+    /// hold the co-design optimum, with their multipliers).
+    Landscape {
+        /// Grid size n (n × n solves, at least 2), overriding `[codesign] landscape_grid`.
+        #[arg(long)]
+        grid: Option<usize>,
+        /// Output folder (default: `out/codesign-landscape`).
+        #[arg(long)]
+        out_dir: Option<PathBuf>,
+        /// The convergence study's sweep.json (from `adam codesign sweep`) whose endpoints to
+        /// draw; without it the study is run and its sweep.json written beside the figure.
+        #[arg(long)]
+        sweep: Option<PathBuf>,
+        /// Where each grid solve starts: from the gait at the initial design (`initial`), or
+        /// ring by ring from its inner neighbour's solution (`neighbours`).
+        #[arg(long, value_enum, default_value = "initial")]
+        start: StartArg,
+    },
+    /// The constraint audit: the gait with and without each constraint that is ours, not the
+    /// paper's (swing clearance envelope, impact-velocity margin, lift-off, pitch limits), from
+    /// the baseline optimum and from scratch; writes audit.md.
+    Audit {
+        /// The robot (default: ADAM generated at the config's initial lengths).
+        #[arg(long)]
+        urdf: Option<PathBuf>,
+        /// Output folder (default: `out/codesign-audit`).
         #[arg(long)]
         out_dir: Option<PathBuf>,
     },
@@ -78,6 +121,9 @@ fn codesign_config(
 /// `adam codesign`: co-designs, writes the URDF and gait, prints the outer iterations and the
 /// comparison with fixed designs, and checks the gait.
 pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
+    if let Some(speeds) = &args.speeds {
+        return speeds::codesign_speeds(args, speeds);
+    }
     let CodesignArgs {
         config,
         inertia,
@@ -148,14 +194,7 @@ pub(crate) fn convergence_sweep(
 ) -> Result<()> {
     use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
     let (config, inertia) = (&args.config, args.inertia);
-    for (flag, given) in [
-        ("--out-gait", args.out_gait.is_some()),
-        ("--out-urdf", args.out_urdf.is_some()),
-    ] {
-        if given {
-            bail!("{flag} is not used by `adam codesign sweep` (its outputs go to --out-dir)");
-        }
-    }
+    refuse_gait_outputs(args, "sweep")?;
     let mut cfg = codesign_config(config, inertia)?;
     if let Some(grid) = grid {
         if !(1..=planner::config::MAX_SWEEP_GRID).contains(&grid) {
@@ -171,6 +210,7 @@ pub(crate) fn convergence_sweep(
     let out_dir = out_dir.unwrap_or(&default_dir);
     let outputs = [
         "sweep.csv",
+        "sweep.json",
         "table.md",
         "convergence.png",
         "convergence.svg",
@@ -219,6 +259,7 @@ pub(crate) fn convergence_sweep(
     .to_string();
     let csv_path = out_dir.join("sweep.csv");
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    planner::codesign::save_sweep(&out_dir.join("sweep.json"), &runs)?;
     // Table II: mean ± std over the runs that are not local minima.
     let good: Vec<&planner::codesign::SweepOutcome> = runs
         .iter()
@@ -278,9 +319,25 @@ pub(crate) fn convergence_sweep(
         (PAPER_OPTIMUM_M[0], PAPER_OPTIMUM_M[1]),
     )?;
     println!(
-        "\nwrote {0}/sweep.csv, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
+        "\nwrote {0}/sweep.csv, {0}/sweep.json, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
         out_dir.display()
     );
+    Ok(())
+}
+
+/// A study writes no gait or URDF: `--out-gait` and `--out-urdf` are refused by name.
+fn refuse_gait_outputs(args: &CodesignArgs, study: &str) -> Result<()> {
+    if args.speeds.is_some() {
+        bail!("--speeds is not used by `adam codesign {study}` (it is a co-design of its own)");
+    }
+    for (flag, given) in [
+        ("--out-gait", args.out_gait.is_some()),
+        ("--out-urdf", args.out_urdf.is_some()),
+    ] {
+        if given {
+            bail!("{flag} is not used by `adam codesign {study}` (its outputs go to --out-dir)");
+        }
+    }
     Ok(())
 }
 

@@ -8,7 +8,7 @@ use planner::config::InertiaCoupling;
 use std::fmt;
 
 /// The coupling in words: `exact` (inside the NLP) or `Alg. 1` (the paper's, between solves).
-fn coupling_name(inertia: InertiaCoupling) -> &'static str {
+pub(crate) fn coupling_name(inertia: InertiaCoupling) -> &'static str {
     match inertia {
         InertiaCoupling::Exact => "exact",
         InertiaCoupling::Alg1 => "Alg. 1",
