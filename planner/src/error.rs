@@ -67,10 +67,12 @@ pub enum PlannerError {
         /// What is wrong with it.
         reason: String,
     },
-    /// The gaits that planned and verified leave a hole in the library wider than
-    /// [`crate::library::MAX_GAP_MPS`].
-    #[error("the gait library would have a hole from {from_mps} to {to_mps} m/s ({:.3} m/s wide, at most {} allowed){}", to_mps - from_mps, crate::library::MAX_GAP_MPS, failed_text(failed))]
+    /// The gaits that planned and verified leave a hole in the library wider than allowed
+    /// (`planner::library::MAX_GAP_MPS`).
+    #[error("the gait library would have a hole from {from_mps} to {to_mps} m/s ({:.3} m/s wide, at most {max_gap_mps} allowed){}", to_mps - from_mps, failed_text(failed))]
     LibraryHole {
+        /// The widest hole allowed, m/s.
+        max_gap_mps: f64,
         /// The speed below the hole (a gait, or the slowest speed asked for), m/s.
         from_mps: f64,
         /// The speed above it, m/s.

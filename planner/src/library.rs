@@ -212,6 +212,7 @@ impl LibraryPlan {
                 return Err(PlannerError::EmptyLibrary { failed });
             }
             return Err(PlannerError::LibraryHole {
+                max_gap_mps: MAX_GAP_MPS,
                 from_mps: from,
                 to_mps: to,
                 failed,
