@@ -35,6 +35,24 @@ pub const A1_MOTOR_WIDTH_M: f64 = 0.045;
 pub const A1_TORQUE_LIMIT_NM: f64 = 33.5;
 /// A1 output speed limit, rad/s (joint side).
 pub const A1_SPEED_LIMIT_RAD_S: f64 = 21.0;
+/// A1 gear ratio N (Unitree A1 actuator specification: 9.1).
+pub const A1_GEAR_RATIO: f64 = 9.1;
+/// A1 rotor inertia about its axis (motor side), kg·m²: MuJoCo Menagerie's A1 model
+/// (`unitree_a1/a1.xml`) gives the leg joints `armature="0.01"` kg·m² (joint side), which is
+/// N² J_rotor, so J_rotor = 0.01 / 9.1².
+pub const A1_ROTOR_INERTIA_KGM2: f64 = 0.01 / (A1_GEAR_RATIO * A1_GEAR_RATIO);
+/// A1 torque constant k_t (motor side), N·m/A: 0.8372 N·m/A at the output (a public Simscape
+/// model of the A1, see configs/robots/README.md) over N = 9.1; the simulator's firmware model
+/// uses the same 0.092 N·m/A (40 A at the 33.5 N·m peak).
+pub const A1_TORQUE_CONSTANT_NM_PER_A: f64 = 0.092;
+/// A1 winding resistance R in P_cu = i² R, Ω: no public identification found; the simulator's
+/// firmware model's value (its thermal model), an assumption (configs/robots/README.md).
+pub const A1_WINDING_RESISTANCE_OHM: f64 = 0.25;
+/// Viscous friction of the A1 joints, N·m·s/rad: no public identification found (MuJoCo
+/// Menagerie's `damping="2"` is the derivative gain of its position actuators, which have no
+/// `kv`, not friction), so the generated model has none; a URDF may give one per joint with
+/// `<dynamics damping=…>`.
+pub const A1_JOINT_DAMPING_NMS_PER_RAD: f64 = 0.0;
 /// Leg tube: aluminium 6061 density, kg/m³.
 pub const TUBE_DENSITY_KG_M3: f64 = 2700.0;
 /// Leg tube outer radius, m (40 mm tube).
@@ -119,10 +137,10 @@ fn box_part(mass_kg: f64, distance_m: f64, along_m: f64, fore_aft_m: f64, latera
     }
 }
 
-fn tube_part(from_m: f64, to_m: f64) -> Part {
+fn tube_part(from_m: f64, to_m: f64, density_scale: f64) -> Part {
     let l = to_m - from_m;
     let (ro2, ri2) = (TUBE_OUTER_RADIUS_M.powi(2), TUBE_INNER_RADIUS_M.powi(2));
-    let m = TUBE_DENSITY_KG_M3 * std::f64::consts::PI * (ro2 - ri2) * l;
+    let m = density_scale * TUBE_DENSITY_KG_M3 * std::f64::consts::PI * (ro2 - ri2) * l;
     let transverse = m * (3.0 * (ro2 + ri2) + l * l) / 12.0;
     Part {
         mass_kg: m,
@@ -162,13 +180,52 @@ fn combine(parts: &[Part]) -> LinkMassProperties {
     }
 }
 
+/// The mass model's one knob: a scale on the leg tubes' mass per metre (their linear density,
+/// 0.645 kg/m at 1), for showing how the co-design's optimum moves with heavier or lighter
+/// links. The brackets, the knee's A1 and the foot do not scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MassModel {
+    /// Multiplies the tubes' linear density (1 = the Ø40 × 2 mm aluminium 6061 tube).
+    pub link_density_scale: f64,
+}
+
+impl Default for MassModel {
+    fn default() -> Self {
+        Self {
+            link_density_scale: 1.0,
+        }
+    }
+}
+
+impl MassModel {
+    /// The scale must be a finite number > 0.
+    pub fn validate(&self) -> Result<()> {
+        let v = self.link_density_scale;
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(ModelError::InvalidField {
+                origin: "mass model".into(),
+                field: "link_density_scale".into(),
+                value: v.to_string(),
+                reason: "must be a finite number > 0 (1 is the shipped tube)".into(),
+            })
+        }
+    }
+}
+
 /// Exact mass properties of the parametric thigh of length `length_m` (hip axis to knee axis):
 /// hip bracket 0.20 kg, aluminium tube from 0.05 m to L − 0.05 m, knee bracket 0.15 kg, and the
 /// knee's A1 actuator (0.605 kg) on the knee axis.
 pub fn thigh_properties(length_m: f64) -> LinkMassProperties {
+    thigh_properties_with(length_m, &MassModel::default())
+}
+
+/// [`thigh_properties`] with the tube's density scaled by `mass`.
+pub fn thigh_properties_with(length_m: f64, mass: &MassModel) -> LinkMassProperties {
     combine(&[
         box_part(0.20, 0.025, 0.05, 0.06, 0.05),
-        tube_part(0.05, length_m - 0.05),
+        tube_part(0.05, length_m - 0.05, mass.link_density_scale),
         box_part(0.15, length_m - 0.03, 0.04, 0.06, 0.05),
         a1_motor_part(length_m),
     ])
@@ -177,9 +234,14 @@ pub fn thigh_properties(length_m: f64) -> LinkMassProperties {
 /// Exact mass properties of the parametric shin of length `length_m` (knee axis to foot point),
 /// the foot excluded: knee output horn 0.12 kg, tube from 0.05 m to L − 0.02 m, ankle cap 0.04 kg.
 pub fn shin_properties(length_m: f64) -> LinkMassProperties {
+    shin_properties_with(length_m, &MassModel::default())
+}
+
+/// [`shin_properties`] with the tube's density scaled by `mass`.
+pub fn shin_properties_with(length_m: f64, mass: &MassModel) -> LinkMassProperties {
     combine(&[
         box_part(0.12, 0.025, 0.05, 0.05, 0.04),
-        tube_part(0.05, length_m - 0.02),
+        tube_part(0.05, length_m - 0.02, mass.link_density_scale),
         box_part(0.04, length_m - 0.015, 0.02, 0.03, 0.03),
     ])
 }
@@ -238,7 +300,7 @@ pub struct LinkFit {
 
 impl LinkFit {
     /// Fits `geometry` sampled at `lengths_m`.
-    pub fn fit(geometry: fn(f64) -> LinkMassProperties, lengths_m: &[f64]) -> Self {
+    pub fn fit(geometry: impl Fn(f64) -> LinkMassProperties, lengths_m: &[f64]) -> Self {
         let samples: Vec<LinkMassProperties> = lengths_m.iter().map(|&l| geometry(l)).collect();
         let f = |get: fn(&LinkMassProperties) -> f64| {
             Cubic::fit(lengths_m, &samples.iter().map(get).collect::<Vec<_>>())
@@ -265,7 +327,11 @@ impl LinkFit {
 
     /// Largest relative error of the fit against `geometry` over `n` evenly spaced lengths in the
     /// design range, over all five properties.
-    pub fn max_relative_error(&self, geometry: fn(f64) -> LinkMassProperties, n: usize) -> f64 {
+    pub fn max_relative_error(
+        &self,
+        geometry: impl Fn(f64) -> LinkMassProperties,
+        n: usize,
+    ) -> f64 {
         (0..n)
             .map(|i| DESIGN_MIN_M + (DESIGN_MAX_M - DESIGN_MIN_M) * i as f64 / (n - 1) as f64)
             .map(|l| {
@@ -299,14 +365,19 @@ pub struct InertiaFits {
 impl InertiaFits {
     /// Samples the parametric geometry at [`FIT_SAMPLES`] evenly spaced lengths and fits cubics.
     pub fn adam() -> Self {
+        Self::adam_with(&MassModel::default())
+    }
+
+    /// [`Self::adam`] for the mass model `mass` (scaled tube density).
+    pub fn adam_with(mass: &MassModel) -> Self {
         let sample_lengths_m: Vec<f64> = (0..FIT_SAMPLES)
             .map(|i| {
                 DESIGN_MIN_M + (DESIGN_MAX_M - DESIGN_MIN_M) * i as f64 / (FIT_SAMPLES - 1) as f64
             })
             .collect();
         Self {
-            thigh: LinkFit::fit(thigh_properties, &sample_lengths_m),
-            shin: LinkFit::fit(shin_properties, &sample_lengths_m),
+            thigh: LinkFit::fit(|l| thigh_properties_with(l, mass), &sample_lengths_m),
+            shin: LinkFit::fit(|l| shin_properties_with(l, mass), &sample_lengths_m),
             sample_lengths_m,
         }
     }
@@ -360,15 +431,26 @@ pub const HIP_LATERAL_OFFSET_M: f64 = 0.09;
 /// The URDF text of the planar ADAM with the given thigh and shin lengths, link inertials from the
 /// cubic fits, and design virtual joints at zero whose limits keep each length in the design range.
 pub fn generate_urdf(design: &DesignLengths) -> Result<String> {
+    generate_urdf_with(design, &MassModel::default())
+}
+
+/// [`generate_urdf`] for the mass model `mass` (its header names a scale other than 1).
+pub fn generate_urdf_with(design: &DesignLengths, mass: &MassModel) -> Result<String> {
     design.validate()?;
-    let fits = InertiaFits::adam();
+    mass.validate()?;
+    let fits = InertiaFits::adam_with(mass);
     let (tm, th, ti) = torso_properties();
     let (fm, fh, fi) = FOOT;
     let mut s = String::new();
     s.push_str(&format!(
-        "<?xml version=\"1.0\"?>\n<!-- Planar point-foot ADAM for treadmill-boom walking. GENERATED by model::design::generate_urdf (the command adam generate-urdf) for thigh {t} m and shin {sh} m: do not edit by hand. Sources of every number: configs/robots/README.md. -->\n<robot name=\"adam_planar\">\n",
+        "<?xml version=\"1.0\"?>\n<!-- Planar point-foot ADAM for treadmill-boom walking. GENERATED by model::design::generate_urdf (the command adam generate-urdf) for thigh {t} m and shin {sh} m{scale}: do not edit by hand. Sources of every number: configs/robots/README.md. -->\n<robot name=\"adam_planar\">\n",
         t = design.thigh_length_m,
-        sh = design.shin_length_m
+        sh = design.shin_length_m,
+        scale = if mass.link_density_scale == 1.0 {
+            String::new()
+        } else {
+            format!(" with the leg tubes' density scaled by {}", mass.link_density_scale)
+        }
     ));
     s.push_str(&format!(
         "  <link name=\"torso\">\n    <inertial>\n      <origin xyz=\"0 0 {th}\" rpy=\"0 0 0\"/>\n      <mass value=\"{tm}\"/>\n      <inertia ixx=\"{}\" ixy=\"0\" ixz=\"0\" iyy=\"{}\" iyz=\"0\" izz=\"{}\"/>\n    </inertial>\n  </link>\n",
@@ -408,7 +490,7 @@ pub fn generate_urdf(design: &DesignLengths) -> Result<String> {
         let (hl, hu) = HIP_PITCH_LIMITS_RAD;
         let (kl, ku) = KNEE_PITCH_LIMITS_RAD;
         s.push_str(&format!(
-            "  <joint name=\"{side}_hip_pitch\" type=\"revolute\">\n    <parent link=\"torso\"/>\n    <child link=\"{side}_thigh\"/>\n    <origin xyz=\"0 {y} 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n    <limit lower=\"{hl}\" upper=\"{hu}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
+            "  <joint name=\"{side}_hip_pitch\" type=\"revolute\">\n    <parent link=\"torso\"/>\n    <child link=\"{side}_thigh\"/>\n    <origin xyz=\"0 {y} 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n    <dynamics damping=\"{A1_JOINT_DAMPING_NMS_PER_RAD}\"/>\n    <limit lower=\"{hl}\" upper=\"{hu}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
         ));
         s.push_str(&format!(
             "  <joint name=\"{side}_thigh_design\" type=\"prismatic\">\n    <parent link=\"{side}_thigh\"/>\n    <child link=\"{side}_thigh_virtual\"/>\n    <origin xyz=\"0 0 {}\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 0 -1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n  </joint>\n",
@@ -417,7 +499,7 @@ pub fn generate_urdf(design: &DesignLengths) -> Result<String> {
             DESIGN_MAX_M - lt
         ));
         s.push_str(&format!(
-            "  <joint name=\"{side}_knee_pitch\" type=\"revolute\">\n    <parent link=\"{side}_thigh_virtual\"/>\n    <child link=\"{side}_shin\"/>\n    <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n    <limit lower=\"{kl}\" upper=\"{ku}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
+            "  <joint name=\"{side}_knee_pitch\" type=\"revolute\">\n    <parent link=\"{side}_thigh_virtual\"/>\n    <child link=\"{side}_shin\"/>\n    <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n    <dynamics damping=\"{A1_JOINT_DAMPING_NMS_PER_RAD}\"/>\n    <limit lower=\"{kl}\" upper=\"{ku}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
         ));
         s.push_str(&format!(
             "  <joint name=\"{side}_shin_design\" type=\"prismatic\">\n    <parent link=\"{side}_shin\"/>\n    <child link=\"{side}_shin_virtual\"/>\n    <origin xyz=\"0 0 {}\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 0 -1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n  </joint>\n",
@@ -429,13 +511,33 @@ pub fn generate_urdf(design: &DesignLengths) -> Result<String> {
             "  <joint name=\"{side}_foot_fixed\" type=\"fixed\">\n    <parent link=\"{side}_shin_virtual\"/>\n    <child link=\"{side}_foot\"/>\n    <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n  </joint>\n"
         ));
     }
+    for side in ["left", "right"] {
+        for joint in ["hip_pitch", "knee_pitch"] {
+            s.push_str(&a1_transmission(&format!("{side}_{joint}")));
+        }
+    }
     s.push_str("</robot>\n");
     Ok(s)
 }
 
+/// The `<transmission>` of an A1 driving `joint` (the format of [`crate::urdf`]).
+fn a1_transmission(joint: &str) -> String {
+    format!(
+        "  <transmission name=\"{joint}_a1\">\n    <type>transmission_interface/SimpleTransmission</type>\n    <joint name=\"{joint}\"/>\n    <actuator name=\"{joint}_motor\">\n      <mechanicalReduction>{A1_GEAR_RATIO}</mechanicalReduction>\n      <rotorInertia>{A1_ROTOR_INERTIA_KGM2}</rotorInertia>\n      <torqueConstant>{A1_TORQUE_CONSTANT_NM_PER_A}</torqueConstant>\n      <windingResistance>{A1_WINDING_RESISTANCE_OHM}</windingResistance>\n    </actuator>\n  </transmission>\n"
+    )
+}
+
 /// `GenerateModel(q_D)`: the planar model and its URDF text for the given design.
 pub fn generate_model(design: &DesignLengths) -> Result<(PlanarModel, String)> {
-    let text = generate_urdf(design)?;
+    generate_model_with(design, &MassModel::default())
+}
+
+/// [`generate_model`] for the mass model `mass`.
+pub fn generate_model_with(
+    design: &DesignLengths,
+    mass: &MassModel,
+) -> Result<(PlanarModel, String)> {
+    let text = generate_urdf_with(design, mass)?;
     let model = PlanarModel::from_urdf_str(&text, "<generated>")?;
     Ok((model, text))
 }

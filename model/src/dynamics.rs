@@ -7,6 +7,13 @@
 //!   Coriolis, centrifugal and gravity terms. The tests check it against the Lagrangian
 //!   (Christoffel symbols of D, differentiated with dual numbers) and energy conservation.
 //!
+//! The joint drives ([`crate::robot::JointDrive`]) add to both: each revolute joint's armature
+//! N² J_rotor to its diagonal entry of D (so the impact map sees the rotors too) and its viscous
+//! friction b q̇ to its entry of H. Every function here (D and H, inverse dynamics, the
+//! constrained dynamics, the impact map, the kinetic energy ½ N² J_rotor q̇²) includes them, so
+//! the planner, the Poincaré check and the simulator all see the same actuators; a model without
+//! drive data is the rigid-body model.
+//!
 //! The stance foot is a holonomic constraint `p_st(q) = const` with contact force λ = (F_x, F_z)
 //! in the world; the impact with the ground is rigid and plastic (the paper's reset map Δ, with the
 //! left/right relabeling in [`PlanarModel::reset_map`]).
@@ -148,9 +155,54 @@ impl PlanarModel {
                 }
             }
         }
+        for (c, armature, damping) in self.drives() {
+            if armature != 0.0 {
+                dmat[(c, c)] += S::from(armature);
+            }
+            if damping != 0.0 {
+                h[c] += dq[c] * damping;
+            }
+        }
         Ok(Dynamics {
             mass_matrix: dmat,
             drift: h,
+        })
+    }
+
+    /// The revolute joints with a drive: (coordinate, armature N² J_rotor in kg·m², viscous
+    /// friction b in N·m·s/rad). Never allocates.
+    pub fn drives(&self) -> impl Iterator<Item = (usize, f64, f64)> + '_ {
+        self.joints.iter().filter_map(|j| {
+            let crate::robot::JointKind::Revolute { .. } = j.kind else {
+                return None;
+            };
+            let (a, b) = (j.drive.armature_kgm2(), j.drive.damping_nms_per_rad);
+            (a != 0.0 || b != 0.0).then_some((j.coordinate, a, b))
+        })
+    }
+
+    /// Joint rate q̇ of revolute joint `j` from body states: its body's angular velocity less its
+    /// parent's, times the axis sign (so the drives need no q̇ beside the states).
+    fn revolute_rate<S: Real>(&self, st: &BodyStates<S>, j: usize) -> S {
+        let joint = &self.joints[j];
+        let body = joint.body;
+        let parent = self.bodies[body].parent.unwrap_or(0);
+        match joint.kind {
+            crate::robot::JointKind::Revolute { axis_sign } => {
+                (st.omega[body] - st.omega[parent]) * axis_sign
+            }
+            crate::robot::JointKind::Prismatic { .. } => S::zero(),
+        }
+    }
+
+    /// Each drive's (joint index, armature, damping), for the rate from body states.
+    fn drive_joints(&self) -> impl Iterator<Item = (usize, usize, f64, f64)> + '_ {
+        self.joints.iter().enumerate().filter_map(|(i, j)| {
+            let crate::robot::JointKind::Revolute { .. } = j.kind else {
+                return None;
+            };
+            let (a, b) = (j.drive.armature_kgm2(), j.drive.damping_nms_per_rad);
+            (a != 0.0 || b != 0.0).then_some((i, j.coordinate, a, b))
         })
     }
 
@@ -242,6 +294,14 @@ impl PlanarModel {
                 for &(k, ak) in &ang[..na] {
                     mass_matrix[(i, k)] += inertia.inertia_yy_kgm2 * (ai * ak);
                 }
+            }
+        }
+        for (j, c, armature, damping) in self.drive_joints() {
+            if armature != 0.0 {
+                mass_matrix[(c, c)] += armature;
+            }
+            if damping != 0.0 {
+                drift[c] += self.revolute_rate(st, j) * damping;
             }
         }
         Ok(())
@@ -361,10 +421,19 @@ impl PlanarModel {
                 }
             }
         }
+        for (j, c, armature, damping) in self.drive_joints() {
+            if armature != 0.0 {
+                out[c] += ddq[c] * armature;
+            }
+            if damping != 0.0 {
+                out[c] += self.revolute_rate(st, j) * damping;
+            }
+        }
         Ok(())
     }
 
-    /// Kinetic energy ½ Σ (m |v_com|² + I ω²) from the velocity recursion (independent of D), J.
+    /// Kinetic energy ½ Σ (m |v_com|² + I ω²) from the velocity recursion (independent of D), plus
+    /// each rotor's ½ N² J_rotor q̇², J.
     pub fn kinetic_energy<S: Real>(&self, q: &[S], dq: &[S]) -> Result<S> {
         let mut st = BodyStates::zeroed();
         self.body_states_into(q, dq, &mut st)?;
@@ -374,6 +443,9 @@ impl PlanarModel {
             let v = self.point_velocity(&st, b, i.com_xz_m);
             let w = st.omega[b];
             t += (i.mass_kg * (v[0] * v[0] + v[1] * v[1]) + i.inertia_yy_kgm2 * w * w) * 0.5;
+        }
+        for (c, armature, _) in self.drives() {
+            t += dq[c] * dq[c] * (0.5 * armature);
         }
         Ok(t)
     }

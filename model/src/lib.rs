@@ -13,6 +13,11 @@
 //! gait files by speed, each with its check ──(library)──▶ gait library JSON
 //! ```
 //!
+//! Each revolute joint may carry a drive ([`JointDrive`], from the URDF's `<dynamics>` and
+//! `<transmission>`): the A1 rotor's armature N² J_rotor in D (and so in the impact map) and
+//! viscous friction b q̇ in H, seen alike by the planner, the Poincaré check and the simulator;
+//! the torque constant and winding resistance are for the planner's electrical cost.
+//!
 //! Every kinematic and dynamic function is generic over the scalar [`Real`]: `f64` for the
 //! runtime and num-dual numbers (`Dual64`, `HyperDual64`, `DualSVec64<N>`, ...) for exact
 //! derivatives in the planner.
@@ -44,7 +49,7 @@ pub mod urdf;
 
 pub use error::{ModelError, Result};
 pub use num_dual;
-pub use robot::{PlanarModel, Side};
+pub use robot::{JointDrive, JointKind, PlanarModel, Side};
 
 /// The scalar of every model computation: `f64` or a num-dual number over `f64`.
 pub trait Real:

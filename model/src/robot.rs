@@ -116,6 +116,52 @@ pub struct Joint {
     pub effort_limit: f64,
     /// Velocity limit (rad/s or m/s), as the URDF gives it (0 for the rigid design joints).
     pub velocity_limit: f64,
+    /// The joint's drive: viscous friction and the actuator behind it (all zero when the URDF
+    /// gives none). Only revolute joints carry one.
+    pub drive: JointDrive,
+}
+
+/// Viscous friction of a joint and the actuator that drives it, read from the URDF
+/// (`<dynamics damping=…>` and a `<transmission>`, see [`crate::urdf`]).
+///
+/// The dynamics use two numbers: the **armature** `N² J_rotor` (the rotor's inertia reflected
+/// through the gear, added to the joint's diagonal entry of the mass matrix D, so it also
+/// enters the impact map) and the **viscous friction** `b q̇` (added to the drift H: a torque
+/// `−b q̇` on the joint). The torque constant and the winding resistance are for the electrical
+/// cost only. A model without the data has zero armature and friction: the rigid-body model.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointDrive {
+    /// Viscous friction coefficient b (joint side), N·m·s/rad.
+    pub damping_nms_per_rad: f64,
+    /// Gear ratio N (motor turns per joint turn), when given.
+    pub gear_ratio: Option<f64>,
+    /// Rotor inertia about its axis (motor side), kg·m², when given.
+    pub rotor_inertia_kgm2: Option<f64>,
+    /// Motor torque constant k_t (motor side), N·m/A, when given.
+    pub torque_constant_nm_per_a: Option<f64>,
+    /// Winding resistance R in the copper loss i² R (i the torque-producing current), Ω, when
+    /// given.
+    pub winding_resistance_ohm: Option<f64>,
+}
+
+impl JointDrive {
+    /// The reflected rotor inertia N² J_rotor (joint side), kg·m²; zero unless both the gear
+    /// ratio and the rotor inertia are given.
+    pub fn armature_kgm2(&self) -> f64 {
+        match (self.gear_ratio, self.rotor_inertia_kgm2) {
+            (Some(n), Some(j)) => n * n * j,
+            _ => 0.0,
+        }
+    }
+
+    /// The copper-loss coefficient R / (N k_t)², W/(N·m)²: the winding's Joule heat per squared
+    /// joint torque. `Err(field)` names the first constant that is missing.
+    pub fn copper_loss_w_per_nm2(&self) -> std::result::Result<f64, &'static str> {
+        let n = self.gear_ratio.ok_or("mechanicalReduction")?;
+        let kt = self.torque_constant_nm_per_a.ok_or("torqueConstant")?;
+        let r = self.winding_resistance_ohm.ok_or("windingResistance")?;
+        Ok(r / (n * kt * n * kt))
+    }
 }
 
 /// A rigid body: one non-fixed link with the fixed links merged into it.

@@ -8,8 +8,37 @@
 //! a numeric attribute of a joint or inertial that is not the right count of finite numbers, a
 //! negative moment of inertia. Those errors name the link or joint, its line, the attribute and
 //! the value as written.
+//!
+//! # Joint drives (armature and viscous friction)
+//! A revolute joint's viscous friction is the standard `<dynamics damping="b"/>` (N·m·s/rad,
+//! joint side; `friction`, Coulomb friction, is refused unless zero: the model has none). Its
+//! actuator is a standard ROS `<transmission>` whose `<actuator>` carries the gear ratio as
+//! `<mechanicalReduction>` (the ROS element) and, as elements of the same form that ROS tools
+//! ignore, the motor's constants:
+//!
+//! ```xml
+//! <transmission name="left_knee_pitch_transmission">
+//!   <type>transmission_interface/SimpleTransmission</type>
+//!   <joint name="left_knee_pitch"/>
+//!   <actuator name="left_knee_pitch_motor">
+//!     <mechanicalReduction>9.1</mechanicalReduction>     <!-- N, motor turns per joint turn -->
+//!     <rotorInertia>0.000120758</rotorInertia>           <!-- J_rotor, kg·m², motor side -->
+//!     <torqueConstant>0.092</torqueConstant>             <!-- k_t, N·m/A, motor side -->
+//!     <windingResistance>0.25</windingResistance>        <!-- R, Ω, in P_cu = i² R -->
+//!   </actuator>
+//! </transmission>
+//! ```
+//!
+//! (Drake's `drake:gear_ratio` and `drake:rotor_inertia` are the same two numbers.) The armature
+//! N² J_rotor enters the mass matrix; k_t and R only the electrical cost. Every element is
+//! optional: a joint without them has zero armature and friction. A value that is not one
+//! finite number, a negative one (zero gear ratio or torque constant), a transmission naming an
+//! unknown or non-revolute joint, or two transmissions for one joint are errors naming the
+//! transmission or joint, its line, the element and the value.
 
-use crate::robot::{Body, BodyInertia, Frame, Joint, JointKind, JointRole, PlanarModel};
+use crate::robot::{
+    Body, BodyInertia, Frame, Joint, JointDrive, JointKind, JointRole, PlanarModel,
+};
 use crate::{ModelError, Result};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
@@ -33,11 +62,56 @@ impl PlanarModel {
     /// Loads a planar model from URDF text; `origin` names the source in error messages.
     pub fn from_urdf_str(text: &str, origin: &str) -> Result<Self> {
         let has_inertial = scan(text, origin)?;
+        let drives = scan_transmissions(text, origin)?;
         let robot = urdf_rs::read_from_string(text).map_err(|e| ModelError::UrdfSyntax {
             origin: origin.to_string(),
             message: e.to_string(),
         })?;
-        build(&robot, &has_inertial, origin)
+        let mut model = build(&robot, &has_inertial, origin)?;
+        for j in &robot.joints {
+            if let (Some(d), Some(i)) = (&j.dynamics, model.joint_index(&j.name)) {
+                model.joints[i].drive.damping_nms_per_rad = d.damping;
+            }
+        }
+        for (joint, (drive, element)) in drives {
+            let i = model
+                .joint_index(&joint)
+                .ok_or_else(|| ModelError::UrdfField {
+                    origin: origin.to_string(),
+                    element: element.clone(),
+                    field: "joint name".into(),
+                    value: joint.clone(),
+                    reason: "no movable joint of this name".into(),
+                })?;
+            let JointKind::Revolute { .. } = model.joints[i].kind else {
+                return Err(ModelError::UrdfField {
+                    origin: origin.to_string(),
+                    element,
+                    field: "joint name".into(),
+                    value: joint,
+                    reason: "an actuator drives a revolute joint; this one is prismatic".into(),
+                });
+            };
+            let damping = model.joints[i].drive.damping_nms_per_rad;
+            model.joints[i].drive = JointDrive {
+                damping_nms_per_rad: damping,
+                ..drive
+            };
+        }
+        for j in &model.joints {
+            if let JointKind::Prismatic { .. } = j.kind {
+                if j.drive.damping_nms_per_rad != 0.0 {
+                    return Err(ModelError::UrdfField {
+                        origin: origin.to_string(),
+                        element: format!("joint '{}'", j.name),
+                        field: "dynamics damping".into(),
+                        value: j.drive.damping_nms_per_rad.to_string(),
+                        reason: "a design (prismatic) joint is rigid: it takes no friction".into(),
+                    });
+                }
+            }
+        }
+        Ok(model)
     }
 }
 
@@ -57,6 +131,12 @@ const CHECKED_ATTRIBUTES: &[(&[&str], &[&str], &str, usize)] = &[
         &["xyz", "rpy"],
         "inertial origin",
         3,
+    ),
+    (
+        &["joint", "dynamics"],
+        &["damping", "friction"],
+        "dynamics",
+        1,
     ),
     (&["link", "inertial", "mass"], &["value"], "mass", 1),
     (
@@ -179,6 +259,18 @@ fn scan(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
                                         "a moment of inertia cannot be negative".into()
                                     ));
                                 }
+                                if *key == "damping" && v < 0.0 {
+                                    return Err(bad(
+                                        "viscous friction cannot be negative (it would add energy)"
+                                            .into(),
+                                    ));
+                                }
+                                if *key == "friction" && v != 0.0 {
+                                    return Err(bad(
+                                        "Coulomb friction is not modelled: write 0 or leave it out (viscous friction is damping)"
+                                            .into(),
+                                    ));
+                                }
                             }
                             Ok(_) => return Err(bad(format!("'{n}' is not a finite number"))),
                             Err(_) => return Err(bad(format!("'{n}' is not a number"))),
@@ -198,6 +290,158 @@ fn scan(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
     }
     Ok(out)
 }
+
+/// The `<transmission>` elements: for each joint they name, its drive (gear ratio and motor
+/// constants; damping comes from `<dynamics>`) and the transmission as errors name it.
+fn scan_transmissions(text: &str, origin: &str) -> Result<HashMap<String, (JointDrive, String)>> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut out: HashMap<String, (JointDrive, String)> = HashMap::new();
+    let line_at = |pos: u64| {
+        text.as_bytes()[..(pos as usize).min(text.len())]
+            .iter()
+            .filter(|b| **b == b'\n')
+            .count()
+            + 1
+    };
+    let syntax = |e: String| ModelError::UrdfSyntax {
+        origin: origin.to_string(),
+        message: e,
+    };
+    // Depth of the element being read (1: a child of <robot>).
+    let mut depth = 0usize;
+    // The transmission being read: (element for errors, its depth, joint, drive).
+    let mut current: Option<(String, usize, Option<String>, JointDrive)> = None;
+    // The constant whose text is being read: (element name, line).
+    let mut field: Option<(String, usize)> = None;
+    loop {
+        let pos = reader.buffer_position();
+        let event = reader.read_event().map_err(|e| syntax(e.to_string()))?;
+        let (e, empty) = match &event {
+            Event::Start(e) => (e.clone(), false),
+            Event::Empty(e) => (e.clone(), true),
+            Event::End(_) => {
+                if let Some((element, d, joint, drive)) = current.take() {
+                    if d == depth {
+                        let Some(joint) = joint else {
+                            return Err(ModelError::UrdfField {
+                                origin: origin.to_string(),
+                                element,
+                                field: "joint".into(),
+                                value: String::new(),
+                                reason: "a transmission names its joint: <joint name=\"…\"/>"
+                                    .into(),
+                            });
+                        };
+                        if let Some((_, first)) = out.get(&joint) {
+                            return Err(ModelError::UrdfField {
+                                origin: origin.to_string(),
+                                element,
+                                field: "joint name".into(),
+                                value: joint,
+                                reason: format!("{first} drives this joint already"),
+                            });
+                        }
+                        out.insert(joint, (drive, element));
+                    } else {
+                        current = Some((element, d, joint, drive));
+                    }
+                }
+                field = None;
+                depth = depth.saturating_sub(1);
+                continue;
+            }
+            Event::Text(t) => {
+                if let (Some((name, line)), Some((element, _, _, drive))) = (&field, &mut current) {
+                    let value = t.decode().map(|v| v.trim().to_string()).unwrap_or_default();
+                    let bad = |reason: &str| ModelError::UrdfField {
+                        origin: origin.to_string(),
+                        element: element.clone(),
+                        field: format!("{name} (line {line})"),
+                        value: value.clone(),
+                        reason: reason.to_string(),
+                    };
+                    let v: f64 = match value.parse::<f64>() {
+                        Ok(v) if v.is_finite() => v,
+                        Ok(_) => return Err(bad("not a finite number")),
+                        Err(_) => return Err(bad("not a number")),
+                    };
+                    let positive = DRIVE_FIELDS.iter().any(|(f, p)| f == name && *p);
+                    if v < 0.0 || (positive && v == 0.0) {
+                        return Err(bad(if positive {
+                            "must be positive"
+                        } else {
+                            "cannot be negative"
+                        }));
+                    }
+                    let slot = match name.as_str() {
+                        "mechanicalReduction" => &mut drive.gear_ratio,
+                        "rotorInertia" => &mut drive.rotor_inertia_kgm2,
+                        "torqueConstant" => &mut drive.torque_constant_nm_per_a,
+                        _ => &mut drive.winding_resistance_ohm,
+                    };
+                    *slot = Some(v);
+                }
+                continue;
+            }
+            Event::Eof => break,
+            _ => continue,
+        };
+        depth += 1;
+        let name = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+        let line = line_at(pos);
+        if depth == 2 && name == "transmission" {
+            let tname = e
+                .attributes()
+                .flatten()
+                .find(|a| a.key.as_ref() == b"name")
+                .map(|a| String::from_utf8_lossy(&a.value).into_owned())
+                .unwrap_or_default();
+            current = Some((
+                format!("transmission '{tname}' (line {line})"),
+                depth,
+                None,
+                JointDrive::default(),
+            ));
+        } else if let Some((_, _, joint, _)) = &mut current {
+            if name == "joint" {
+                *joint = e
+                    .attributes()
+                    .flatten()
+                    .find(|a| a.key.as_ref() == b"name")
+                    .map(|a| String::from_utf8_lossy(&a.value).into_owned());
+            } else if DRIVE_FIELDS.iter().any(|(f, _)| *f == name) {
+                field = Some((name, line));
+            }
+        }
+        if empty {
+            // An empty element closes at once (an empty transmission has no joint).
+            if let Some((element, d, None, _)) = &current {
+                if *d == depth {
+                    return Err(ModelError::UrdfField {
+                        origin: origin.to_string(),
+                        element: element.clone(),
+                        field: "joint".into(),
+                        value: String::new(),
+                        reason: "a transmission names its joint: <joint name=\"…\"/>".into(),
+                    });
+                }
+            }
+            field = None;
+            depth -= 1;
+        }
+    }
+    Ok(out)
+}
+
+/// The drive constants a transmission's actuator may carry, and whether each must be positive
+/// (it divides something).
+const DRIVE_FIELDS: [(&str, bool); 4] = [
+    ("mechanicalReduction", true),
+    ("rotorInertia", false),
+    ("torqueConstant", true),
+    ("windingResistance", false),
+];
 
 /// Planar projection of a URDF inertial: (mass, com x–z in the link frame, I_yy about the com).
 fn project_inertial(link: &urdf_rs::Link, origin: &str) -> Result<BodyInertia<f64>> {
@@ -470,6 +714,7 @@ fn build(
                 upper,
                 effort_limit: effort,
                 velocity_limit: velocity,
+                drive: JointDrive::default(),
             });
             model.bodies.push(Body {
                 name: child.to_string(),

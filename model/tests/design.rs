@@ -98,3 +98,56 @@ fn committed_adam_urdf_is_the_generated_one() {
     let mass = model.total_mass_kg();
     assert!((15.0..18.0).contains(&mass), "total mass {mass} kg");
 }
+
+/// The link-density scale moves only the tubes' mass, the fits follow it, and scale 1 is the
+/// shipped model.
+#[test]
+#[allow(clippy::unwrap_used)]
+fn link_density_scale_scales_the_tubes_and_the_fits_follow() {
+    use model::design::{
+        generate_model_with, generate_urdf_with, shin_properties_with, thigh_properties_with,
+        InertiaFits, MassModel,
+    };
+    let one = MassModel::default();
+    let heavy = MassModel {
+        link_density_scale: 1.5,
+    };
+    for l in [0.15, 0.24, 0.35] {
+        // Tube mass by hand: ρ π (r_o² − r_i²) × its length (thigh: L − 0.10 m, shin: L − 0.07 m).
+        let per_m = 2700.0 * std::f64::consts::PI * (0.020f64.powi(2) - 0.018f64.powi(2));
+        let dt = thigh_properties_with(l, &heavy).mass_kg - thigh_properties_with(l, &one).mass_kg;
+        let ds = shin_properties_with(l, &heavy).mass_kg - shin_properties_with(l, &one).mass_kg;
+        assert!((dt - 0.5 * per_m * (l - 0.10)).abs() < 1e-12, "{dt}");
+        assert!((ds - 0.5 * per_m * (l - 0.07)).abs() < 1e-12, "{ds}");
+    }
+    let fits = InertiaFits::adam_with(&heavy);
+    assert!(
+        fits.thigh
+            .max_relative_error(|l| thigh_properties_with(l, &heavy), 201)
+            < 0.01
+    );
+    assert!(
+        fits.shin
+            .max_relative_error(|l| shin_properties_with(l, &heavy), 201)
+            < 0.01
+    );
+    assert_eq!(
+        generate_urdf_with(&DesignLengths::ADAM, &one).unwrap(),
+        generate_urdf(&DesignLengths::ADAM).unwrap()
+    );
+    let (m1, _) = generate_model_with(&DesignLengths::ADAM, &one).unwrap();
+    let (m15, text) = generate_model_with(&DesignLengths::ADAM, &heavy).unwrap();
+    assert!(text.contains("density scaled by 1.5"));
+    assert!(m15.total_mass_kg() > m1.total_mass_kg() + 0.1);
+    for bad in [0.0, -1.0, f64::NAN] {
+        let e = generate_urdf_with(
+            &DesignLengths::ADAM,
+            &MassModel {
+                link_density_scale: bad,
+            },
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("link_density_scale"), "{e}");
+    }
+}

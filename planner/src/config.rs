@@ -102,12 +102,81 @@ impl GaitConfig {
     }
 }
 
-/// The cost: weighted mechanical cost of transport.
+/// The cost the gait minimizes (`[cost]`): its kind, the per-joint weights every kind applies,
+/// and, for `kind = "weighted"`, the weights of the sum. The formulas and units are in
+/// [`crate::collocation`] ("Costs") and `planner/CODESIGN.md`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CostConfig {
-    /// Weight w_i per actuated joint, in the model's coordinate order.
+    /// Which cost: `mechanical` (the default), `electrical`, `torque_squared` or `weighted`.
+    #[serde(default)]
+    pub kind: CostKind,
+    /// Weight w_i per actuated joint, in the model's coordinate order (every kind).
     pub weights: Vec<f64>,
+    /// The weighted sum's weights (`[cost.weighted]`); only with `kind = "weighted"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weighted: Option<CostMix>,
+}
+
+/// The kinds of cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CostKind {
+    /// Mechanical cost of transport Σ w_i ∫ |u_i q̇_i| dt / (m g d), dimensionless.
+    #[default]
+    Mechanical,
+    /// Electrical cost of transport of the A1 actuators: Σ w_i ∫ [(u_i / (N k_t))² R +
+    /// max(u_i q̇_i, 0)] dt / (m g d), dimensionless (copper loss plus positive mechanical
+    /// power, no regeneration); N, k_t, R from the robot's transmissions.
+    Electrical,
+    /// Torque squared per distance Σ w_i ∫ u_i² dt / d, N²·m·s.
+    TorqueSquared,
+    /// The weighted sum of the three, weights in `[cost.weighted]`.
+    Weighted,
+}
+
+impl CostKind {
+    /// The name as the config writes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CostKind::Mechanical => "mechanical",
+            CostKind::Electrical => "electrical",
+            CostKind::TorqueSquared => "torque_squared",
+            CostKind::Weighted => "weighted",
+        }
+    }
+}
+
+/// Weights of the weighted sum λ_m Φ_mech + λ_e Φ_elec + λ_τ Φ_τ² (each ≥ 0, not all zero).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CostMix {
+    /// λ_m, on the mechanical cost of transport (dimensionless).
+    #[serde(default)]
+    pub mechanical: f64,
+    /// λ_e, on the electrical cost of transport (dimensionless).
+    #[serde(default)]
+    pub electrical: f64,
+    /// λ_τ, on the torque squared per distance, 1/(N²·m·s).
+    #[serde(default)]
+    pub torque_squared: f64,
+}
+
+impl CostConfig {
+    /// The cost as a weighted sum: each kind is the sum with one weight 1.
+    pub fn mix(&self) -> CostMix {
+        let one = |m: f64, e: f64, t: f64| CostMix {
+            mechanical: m,
+            electrical: e,
+            torque_squared: t,
+        };
+        match self.kind {
+            CostKind::Mechanical => one(1.0, 0.0, 0.0),
+            CostKind::Electrical => one(0.0, 1.0, 0.0),
+            CostKind::TorqueSquared => one(0.0, 0.0, 1.0),
+            CostKind::Weighted => self.weighted.unwrap_or_default(),
+        }
+    }
 }
 
 /// Solver settings.
@@ -333,7 +402,9 @@ impl Default for PlannerConfig {
                 pitch_limits_rad: [-0.5, 0.5],
             },
             cost: CostConfig {
+                kind: CostKind::Mechanical,
                 weights: vec![1.0; 4],
+                weighted: None,
             },
             solver: SolverConfig {
                 tolerance: 1e-6,
@@ -439,6 +510,35 @@ impl PlannerConfig {
         nonneg("gait.min_normal_force_n", g.min_normal_force_n)?;
         for (i, w) in self.cost.weights.iter().enumerate() {
             nonneg(&format!("cost.weights[{i}]"), *w)?;
+        }
+        match (self.cost.kind, &self.cost.weighted) {
+            (CostKind::Weighted, None) => {
+                return Err(bad(
+                    "cost.kind",
+                    "\"weighted\"".into(),
+                    "a weighted sum needs its weights: add [cost.weighted] with mechanical, electrical and torque_squared",
+                ))
+            }
+            (CostKind::Weighted, Some(mix)) => {
+                nonneg("cost.weighted.mechanical", mix.mechanical)?;
+                nonneg("cost.weighted.electrical", mix.electrical)?;
+                nonneg("cost.weighted.torque_squared", mix.torque_squared)?;
+                if mix.mechanical + mix.electrical + mix.torque_squared == 0.0 {
+                    return Err(bad(
+                        "cost.weighted",
+                        "all zero".into(),
+                        "at least one weight of the sum must be positive",
+                    ));
+                }
+            }
+            (kind, Some(_)) => {
+                return Err(bad(
+                    "cost.weighted",
+                    format!("given with kind = \"{}\"", kind.name()),
+                    "the weights of the sum are read only with kind = \"weighted\"; remove them or change the kind",
+                ))
+            }
+            (_, None) => {}
         }
         positive("solver.tolerance", self.solver.tolerance)?;
         positive("solver.cost_stage_mu_init", self.solver.cost_stage_mu_init)?;

@@ -179,14 +179,6 @@ impl HzdProblem {
                 }
             }
         }
-        // Cost weights of the slack variables.
-        for k in 0..l.points() {
-            for a in (0..nu).filter(|_| l.slacks) {
-                let w = l.simpson_weight(k) * self.config.cost.weights[a];
-                self.slack_weights.push((l.p(k) + a, w));
-                self.slack_weights.push((l.n(k) + a, w));
-            }
-        }
     }
 
     /// Variable bounds.

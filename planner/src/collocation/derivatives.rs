@@ -303,19 +303,7 @@ impl HzdProblem {
             }
         }
         if self.with_cost && objective_factor != 0.0 {
-            let (k, t, d) = (
-                self.cost_factor(),
-                x[self.layout.duration()],
-                x[self.layout.length()],
-            );
-            let s = self.power_sum(x);
-            let sf = objective_factor * k;
-            for (n, &(_, w)) in self.slack_weights.iter().enumerate() {
-                values[self.obj_slots.t_slack[n]] += sf * w / d;
-                values[self.obj_slots.slack_d[n]] += -sf * t * w / (d * d);
-            }
-            values[self.obj_slots.t_d] += -sf * s / (d * d);
-            values[self.obj_slots.d_d] += 2.0 * sf * t * s / (d * d * d);
+            self.add_cost_hessian(x, objective_factor, values);
         }
     }
 }

@@ -32,8 +32,11 @@
 //! Which of these the paper states and which are ours: [`ConstraintGroup::source`]
 //! (planner/CODESIGN.md, "Constraints", has the audit of ours).
 //!
-//! Cost: the weighted mechanical cost of transport Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with
-//! |u q̇| = p + n, p − n = u q̇, p, n ≥ 0 (slack variables), integrated with Simpson's rule.
+//! Cost (`[cost]`, [`crate::config::CostConfig`]; formulas, units and derivatives in `cost`'s
+//! docs and `planner/CODESIGN.md`): by default the weighted mechanical cost of transport
+//! Φ = 1/(M g d) Σ_i w_i ∫ |u_i q̇_i| dt with |u q̇| = p + n, p − n = u q̇, p, n ≥ 0 (slack
+//! variables), integrated with Simpson's rule; or the A1's electrical cost of transport (copper
+//! loss plus the positive power p), the torque squared per distance, or a weighted sum.
 //! The cost stage creates p and n from the feasible point's u q̇, just off the bound the cost
 //! pushes them to ([`Layout::with_slacks`], [`HzdProblem::centre_power_slacks`]). (A smooth
 //! √(P² + δ²) − δ instead of the slacks was measured and not kept: planner/NLP.md, "Eleventh
@@ -65,8 +68,9 @@
 //!   bounds;
 //! - `residuals`: what each block computes (dynamics, phase, outputs, defects, swing foot,
 //!   impact); `design`: the co-design's design joints and link mass properties in a block;
-//! - `cost`: the cost of transport, the feasibility stage's torque regularizer and the power
-//!   slacks' start;
+//! - `cost`: the costs (mechanical, electrical, torque squared, weighted) with their exact
+//!   gradient and Hessian, the feasibility stage's torque regularizer and the power slacks'
+//!   start;
 //! - `sparsity`: the structural zeros found at set-up; `derivatives`: the dual-number sweeps
 //!   over the blocks and the Hessian's assembly;
 //! - `nlp_problem`: [`HzdProblem`] as an [`NlpProblem`](crate::nlp::NlpProblem).

@@ -32,7 +32,7 @@ impl NlpProblem for HzdProblem {
 
     fn objective(&self, x: &[f64]) -> Result<f64, DomainError> {
         Ok(if self.with_cost {
-            self.cost_of_transport(x)
+            self.cost(x)
         } else {
             FEASIBILITY_TORQUE_WEIGHT * self.torque_vars().map(|i| x[i] * x[i]).sum::<f64>()
         })
@@ -46,14 +46,7 @@ impl NlpProblem for HzdProblem {
             }
             return Ok(());
         }
-        let (t_i, d_i) = (self.layout.duration(), self.layout.length());
-        let (k, t, d) = (self.cost_factor(), x[t_i], x[d_i]);
-        let s = self.power_sum(x);
-        for &(i, w) in &self.slack_weights {
-            gradient[i] = k * t * w / d;
-        }
-        gradient[t_i] = k * s / d;
-        gradient[d_i] = -k * t * s / (d * d);
+        self.cost_gradient(x, gradient);
         Ok(())
     }
 

@@ -27,8 +27,11 @@ pub struct HzdProblem {
     pub(super) hess_pattern: SparsityPattern,
     /// Objective Hessian slots: (T,T unused) T–slack, T–d, slack–d, d–d.
     pub(super) obj_slots: ObjectiveSlots,
-    /// Cost weight of each slack variable: c_k w_a.
-    pub(super) slack_weights: Vec<(usize, f64)>,
+    /// The configured cost's terms ([`super::cost`]).
+    pub(super) objective: ObjectiveTerms,
+    /// Copper-loss coefficient R / (N k_t)² of each actuator, W/(N·m)² (empty when the robot
+    /// lacks the constants and the cost does not need them).
+    pub(super) copper_loss_w_per_nm2: Vec<f64>,
     pub(super) initial: Vec<f64>,
     pub(super) total_mass_kg: f64,
     pub(super) design: Option<DesignModel>,
@@ -38,10 +41,24 @@ pub struct HzdProblem {
     pub(super) initial_barrier: Option<f64>,
 }
 
+/// The cost Φ = (T/d) · (Σ a_i x_i + Σ b_j x_j²) as lists of (variable, coefficient).
+#[derive(Clone, Debug, Default)]
+pub(super) struct ObjectiveTerms {
+    /// (slack variable, a_i): the power slacks' coefficients (zeros left out).
+    pub(super) linear: Vec<(usize, f64)>,
+    /// (torque variable, b_j): the scaled torques' coefficients (zeros left out).
+    pub(super) quadratic: Vec<(usize, f64)>,
+}
+
 #[derive(Clone, Debug, Default)]
 pub(super) struct ObjectiveSlots {
-    pub(super) t_slack: Vec<usize>,
-    pub(super) slack_d: Vec<usize>,
+    /// (T, x_i) and (x_i, d) of each linear term.
+    pub(super) t_lin: Vec<usize>,
+    pub(super) lin_d: Vec<usize>,
+    /// (x_j, x_j), (T, x_j) and (x_j, d) of each quadratic term.
+    pub(super) quad: Vec<usize>,
+    pub(super) t_quad: Vec<usize>,
+    pub(super) quad_d: Vec<usize>,
     pub(super) t_d: usize,
     pub(super) d_d: usize,
     /// Diagonal slots of the scaled torques (feasibility-stage regularizer).
@@ -147,6 +164,7 @@ impl HzdProblem {
                 reason: format!("the robot has {} actuated joints", layout.nu),
             });
         }
+        let copper_loss_w_per_nm2 = copper_loss_coefficients(&biped, &config)?;
         let total_mass_kg = biped.model.total_mass_kg();
         let constant_inertias = biped.model.constant_inertias();
         let mut p = Self {
@@ -161,7 +179,8 @@ impl HzdProblem {
             jac_cols: Vec::new(),
             hess_pattern: SparsityPattern::default(),
             obj_slots: ObjectiveSlots::default(),
-            slack_weights: Vec::new(),
+            objective: ObjectiveTerms::default(),
+            copper_loss_w_per_nm2,
             initial,
             total_mass_kg,
             constant_inertias,
@@ -169,6 +188,7 @@ impl HzdProblem {
             design,
         };
         p.build_blocks();
+        p.objective = p.objective_terms();
         p.build_patterns();
         Ok(p)
     }
@@ -244,4 +264,33 @@ impl HzdProblem {
     pub fn constraint_bounds_vec(&self) -> (&[f64], &[f64]) {
         (&self.lower_g, &self.upper_g)
     }
+}
+
+/// Each actuator's copper-loss coefficient R / (N k_t)² from the robot's drives; an error naming
+/// the joint and the missing constant when the cost needs them (an electrical term), else empty
+/// when any is missing.
+fn copper_loss_coefficients(
+    biped: &PlanarBiped,
+    config: &PlannerConfig,
+) -> crate::Result<Vec<f64>> {
+    let model = &biped.model;
+    let mut out = Vec::new();
+    for j in model.actuated_joints() {
+        let joint = &model.joints[j];
+        match joint.drive.copper_loss_w_per_nm2() {
+            Ok(c) => out.push(c),
+            Err(missing) if config.cost.mix().electrical > 0.0 => {
+                return Err(crate::PlannerError::Robot {
+                    robot: model.name.clone(),
+                    reason: format!(
+                        "the electrical cost (cost.kind = \"{}\") needs the actuator constants of joint '{}', but its <transmission> has no <{missing}> (see model::urdf for the format)",
+                        config.cost.kind.name(),
+                        joint.name
+                    ),
+                });
+            }
+            Err(_) => return Ok(Vec::new()),
+        }
+    }
+    Ok(out)
 }

@@ -83,11 +83,15 @@ impl HzdProblem {
             built.push(blk);
         }
         self.blocks = built;
-        // Objective: T–slack, slack–d, T–d, d–d.
+        // Objective: T–slack, slack–d; torque–torque, T–torque, torque–d; T–d, d–d.
         let (t, d) = (self.layout.duration(), self.layout.length());
-        let sw = self.slack_weights.clone();
-        self.obj_slots.t_slack = sw.iter().map(|&(i, _)| slot(t, i, &mut hess)).collect();
-        self.obj_slots.slack_d = sw.iter().map(|&(i, _)| slot(i, d, &mut hess)).collect();
+        let lin = self.objective.linear.clone();
+        self.obj_slots.t_lin = lin.iter().map(|&(i, _)| slot(t, i, &mut hess)).collect();
+        self.obj_slots.lin_d = lin.iter().map(|&(i, _)| slot(i, d, &mut hess)).collect();
+        let quad = self.objective.quadratic.clone();
+        self.obj_slots.quad = quad.iter().map(|&(j, _)| slot(j, j, &mut hess)).collect();
+        self.obj_slots.t_quad = quad.iter().map(|&(j, _)| slot(t, j, &mut hess)).collect();
+        self.obj_slots.quad_d = quad.iter().map(|&(j, _)| slot(j, d, &mut hess)).collect();
         self.obj_slots.t_d = slot(t, d, &mut hess);
         self.obj_slots.d_d = slot(d, d, &mut hess);
         let l = &self.layout;

@@ -8,6 +8,11 @@
 //! # Model
 //! * **Floating base** `q = [x, z, pitch, joints…]` with the model's own `D(q)`, `H(q, q̇)`. The
 //!   design joints are rigid: their rows and columns are dropped (exactly the model's `q̈_D = 0`).
+//! * **Actuators**: each joint's drive from the URDF ([`model::JointDrive`]) is in the model's
+//!   `D` and `H` (`PlanarModel::dynamics_into`): the A1 rotors' armature N² J_rotor on the
+//!   joint's diagonal of `D` (so the plastic impacts see it too) and the viscous friction b q̇ in
+//!   `H`, exactly as the planner and the Poincaré check see them. A URDF without them simulates
+//!   the rigid-body robot.
 //! * **Treadmill.** The belt moves at a constant `belt_speed_mps` backwards. A constant-velocity
 //!   frame is inertial, so the simulation runs in the *belt frame*, where the ground is static and
 //!   a stance foot is pinned; world positions and velocities are reported by adding the belt

@@ -385,6 +385,72 @@ mod tests {
         }
     }
 
+    /// The simulator's accelerations (its D and H from `dynamics_into`, its contact solve) with
+    /// the A1 armature of the URDF and viscous friction added satisfy the inverse dynamics the
+    /// planner's collocation imposes: D q̈ + H = B u + Jᵀ λ on every coordinate that moves.
+    #[test]
+    fn stance_dynamics_with_armature_and_friction_satisfy_the_planners_inverse_dynamics() {
+        let mut m = adam();
+        for j in &mut m.joints {
+            if let model::JointKind::Revolute { .. } = j.kind {
+                j.drive.damping_nms_per_rad = 0.8;
+            }
+        }
+        assert!(m
+            .drives()
+            .all(|(_, armature, _)| (armature - 0.01).abs() < 1e-12));
+        assert_eq!(m.drives().count(), 4);
+        let (q, dq) = state(&m);
+        let legs = m.legs().unwrap();
+        let u = [3.0, -2.0, 5.0, 1.0];
+        let n = m.dof();
+        for frames in [vec![], vec![legs.left.foot]] {
+            let st = m.body_states(&q, &dq).unwrap();
+            let mut mass = nalgebra::DMatrix::zeros(n, n);
+            let mut drift = nalgebra::DVector::zeros(n);
+            m.dynamics_into(&st, &mut mass, &mut drift).unwrap();
+            let mut s = Solver::new(&m);
+            s.factor_mass(&mass).unwrap();
+            let bu = m.generalized_forces(&u).unwrap();
+            let full: Vec<f64> = (0..n).map(|i| bu[i] - drift[i]).collect();
+            let mut acc = vec![0.0; s.len()];
+            s.gather(&full, &mut acc);
+            s.solve_mass(&mut acc);
+            s.set_contacts(&m, &st, &frames);
+            let mut c = [0.0; MAX_ROWS];
+            for (k, &f) in frames.iter().enumerate() {
+                let b = m.frame_bias_acceleration_in(&st, f);
+                c[2 * k] = -b[0];
+                c[2 * k + 1] = -b[1];
+            }
+            let mut lambda = [0.0; MAX_ROWS];
+            s.constrain(&mut acc, &c, &mut lambda);
+            let mut ddq = vec![0.0; n];
+            s.scatter_add(&acc, 1.0, &mut ddq);
+            let tau = m.inverse_dynamics(&q, &dq, &ddq).unwrap();
+            let mut rhs: Vec<f64> = bu.iter().copied().collect();
+            for (k, &f) in frames.iter().enumerate() {
+                let jac = m.frame_jacobian(&st, f);
+                for i in 0..n {
+                    rhs[i] += jac[(0, i)] * lambda[2 * k] + jac[(1, i)] * lambda[2 * k + 1];
+                }
+            }
+            let design: Vec<usize> = m
+                .design_joints()
+                .iter()
+                .map(|&j| m.joints[j].coordinate)
+                .collect();
+            for i in (0..n).filter(|i| !design.contains(i)) {
+                assert!(
+                    (tau[i] - rhs[i]).abs() < 1e-8 * (1.0 + rhs[i].abs()),
+                    "{frames:?} coordinate {i}: inverse dynamics {} vs B u + Jᵀλ {}",
+                    tau[i],
+                    rhs[i]
+                );
+            }
+        }
+    }
+
     #[test]
     fn impact_matches_the_model() {
         let m = adam();
