@@ -24,6 +24,25 @@ pub struct CollocationConfig {
     pub bezier_degree: usize,
     /// ε of the output dynamics ÿ + 2εẏ + ε²y = 0 imposed at every point, 1/s.
     pub output_gain_per_s: f64,
+    /// Grading g ∈ [0, 0.95] of the mesh: 0 uniform; g > 0 makes the first and last intervals
+    /// 1 − g times the uniform length and the middle ones up to 1 + g times
+    /// ([`crate::collocation::mesh_nodes`]), where the transcription error is largest
+    /// (planner/CODESIGN.md, "Plan accuracy"). Default [`DEFAULT_MESH_GRADING`].
+    #[serde(default = "default_mesh_grading")]
+    pub mesh_grading: f64,
+}
+
+/// The default `[collocation] mesh_grading` (planner/CODESIGN.md, "Plan accuracy").
+pub const DEFAULT_MESH_GRADING: f64 = 0.8;
+
+/// The default `[collocation] intervals` (planner/CODESIGN.md, "Plan accuracy").
+pub const DEFAULT_INTERVALS: usize = 20;
+
+/// The largest `[collocation] mesh_grading` accepted (1 would make the end intervals empty).
+pub const MAX_MESH_GRADING: f64 = 0.95;
+
+fn default_mesh_grading() -> f64 {
+    DEFAULT_MESH_GRADING
 }
 
 /// The gait's essential and physical constraints.
@@ -385,9 +404,10 @@ impl Default for PlannerConfig {
         Self {
             schema_version: PLANNER_CONFIG_VERSION,
             collocation: CollocationConfig {
-                intervals: 20,
+                intervals: DEFAULT_INTERVALS,
                 bezier_degree: 5,
                 output_gain_per_s: 10.0,
+                mesh_grading: DEFAULT_MESH_GRADING,
             },
             gait: GaitConfig {
                 stance_leg: Side::Right,
@@ -496,6 +516,13 @@ impl PlannerConfig {
             }
         };
         positive("collocation.output_gain_per_s", c.output_gain_per_s)?;
+        if !(c.mesh_grading.is_finite() && (0.0..=MAX_MESH_GRADING).contains(&c.mesh_grading)) {
+            return Err(bad(
+                "collocation.mesh_grading",
+                c.mesh_grading.to_string(),
+                &format!("must be in [0, {MAX_MESH_GRADING}] (0: uniform intervals)"),
+            ));
+        }
         let g = &self.gait;
         range("gait.step_length_m", g.step_length_m)?;
         positive("gait.step_length_m[0]", g.step_length_m[0])?;
@@ -678,6 +705,29 @@ mod tests {
             .expect_err("unknown field")
             .to_string();
         assert!(e.contains("size"), "{e}");
+    }
+
+    /// The mesh grading defaults to [`DEFAULT_MESH_GRADING`] when a config leaves it out, and
+    /// a grading outside [0, 0.95] (or NaN) is an error naming the field and value.
+    #[test]
+    fn the_mesh_grading_defaults_and_bad_ones_are_named() {
+        let text = toml::to_string(&PlannerConfig::default()).expect("serializes");
+        let line = format!("mesh_grading = {DEFAULT_MESH_GRADING}");
+        assert!(text.contains(&line), "{text}");
+        let cfg = PlannerConfig::from_toml(&text.replace(&line, ""), "x.toml").expect("parses");
+        assert_eq!(cfg.collocation.mesh_grading, DEFAULT_MESH_GRADING);
+        for bad in ["1.5", "-0.1", "nan"] {
+            let text = text.replace(&line, &format!("mesh_grading = {bad}"));
+            let e = PlannerConfig::from_toml(&text, "x.toml")
+                .expect_err("rejected")
+                .to_string();
+            assert!(
+                e.contains("x.toml")
+                    && e.contains("collocation.mesh_grading")
+                    && e.to_lowercase().contains(bad),
+                "{e}"
+            );
+        }
     }
 
     #[test]

@@ -69,7 +69,7 @@ pub fn initial_guess(
     let ds = 1e-4;
     let mut theta = vec![0.0; n];
     for k in 0..n {
-        let s = k as f64 / (n - 1) as f64;
+        let s = layout.time_fraction(k);
         let q = pose(bp, s, step_m, thigh_m, shin_m);
         let qp = pose(bp, (s + ds).min(1.0), step_m, thigh_m, shin_m);
         let qm = pose(bp, (s - ds).max(0.0), step_m, thigh_m, shin_m);

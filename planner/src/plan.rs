@@ -365,6 +365,21 @@ pub(crate) fn solve_stage_attempt(
     })
 }
 
+/// Where the wall time of [`plan_gait_timed`] went, s (the parts add up to its whole).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PlanTimes {
+    /// Building the problems and the starts' guesses (the probe's set-up included).
+    pub problems_s: f64,
+    /// The feasibility solves (every start tried).
+    pub feasibility_s: f64,
+    /// The cost-of-transport solve.
+    pub cost_s: f64,
+    /// The gait file's content from the solution (with its collocation feed-forward).
+    pub gait_s: f64,
+    /// The feed-forward table along the closed-loop orbit ([`crate::verify::feedforward_from_orbit`]).
+    pub feedforward_s: f64,
+}
+
 /// Plans a periodic HZD gait for `model` with its design joints at zero (the URDF's design).
 /// `urdf_ref` is how the gait file names the URDF and `urdf_text` its content (for the hash).
 pub fn plan_gait(
@@ -374,6 +389,19 @@ pub fn plan_gait(
     config: &PlannerConfig,
     on_progress: &mut dyn FnMut(Progress<'_>),
 ) -> Result<PlannedGait> {
+    Ok(plan_gait_timed(model, urdf_ref, urdf_text, config, on_progress)?.0)
+}
+
+/// [`plan_gait`], and where its wall time went.
+pub fn plan_gait_timed(
+    model: &PlanarModel,
+    urdf_ref: &str,
+    urdf_text: &str,
+    config: &PlannerConfig,
+    on_progress: &mut dyn FnMut(Progress<'_>),
+) -> Result<(PlannedGait, PlanTimes)> {
+    let start = Instant::now();
+    let mut times = PlanTimes::default();
     config.validate("planner config")?;
     let setup = Instant::now();
     let biped = PlanarBiped::new(model.clone(), config.gait.stance_leg, &[])?;
@@ -424,14 +452,16 @@ pub fn plan_gait(
             ..Guards::default()
         };
         let attempt = Instant::now();
-        match solve_stage_attempt(
+        let outcome = solve_stage_attempt(
             &feasibility,
             FEASIBILITY,
             &capped,
             None,
             guards,
             on_progress,
-        ) {
+        );
+        times.feasibility_s += attempt.elapsed().as_secs_f64();
+        match outcome {
             Ok(a) if a.usable => {
                 let (x, mut report) = a.into_result()?;
                 report.absorb(&spent);
@@ -459,16 +489,27 @@ pub fn plan_gait(
         nlp::NlpProblem::num_variables(&costed),
         nlp::NlpProblem::num_constraints(&costed),
     );
+    let solve = Instant::now();
     let (x, r2) = solve_stage(&costed, "cost of transport", config, on_progress)?;
+    times.cost_s = solve.elapsed().as_secs_f64();
+    let writing = Instant::now();
     let mut gait = gait_from_solution(&costed, &x, urdf_ref, urdf_text, &[r1.clone(), r2.clone()])?;
+    times.gait_s = writing.elapsed().as_secs_f64();
     // The runtime's feed-forward: the torques along the closed-loop orbit (finer and more
     // faithful than the collocation points' torques that gait_from_solution records).
+    let feedforward = Instant::now();
     gait.feedforward = Some(crate::verify::feedforward_from_orbit(
         model,
         &gait,
         crate::verify::VerifyOptions::default(),
     )?);
-    Ok(PlannedGait {
+    times.feedforward_s = feedforward.elapsed().as_secs_f64();
+    times.problems_s = start.elapsed().as_secs_f64()
+        - times.feasibility_s
+        - times.cost_s
+        - times.gait_s
+        - times.feedforward_s;
+    let planned = PlannedGait {
         gait,
         stages: vec![r1, r2],
         x,
@@ -476,7 +517,8 @@ pub fn plan_gait(
         size,
         feasibility_size: Some(feasibility_size),
         setup_time_s,
-    })
+    };
+    Ok((planned, times))
 }
 
 /// A hand-built start's (step length m, duration s) moved onto `gait.speed_mps`'s middle

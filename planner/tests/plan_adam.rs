@@ -269,10 +269,10 @@ fn plans_and_verifies_a_second_different_five_link_walker() {
     );
     assert!(g.step_length_m >= 0.2 - 1e-6 && g.step_length_m <= 0.5 + 1e-6);
     // Verified independently of the optimizer, like ADAM's: a stable periodic orbit, the planned one.
-    let report = planner::verify::verify_gait(&model, g, planner::verify::VerifyOptions::default())
-        .expect("verifies");
+    // Verified independently of the optimizer, like ADAM's: a stable periodic orbit, the
+    // planned one, its step duration and length within 1 % of the plan's.
+    let report = planner::verify::assert_orbit_matches_plan(&model, g);
     println!("{report}");
-    assert!(report.passed(1e-6), "{report}");
 }
 
 /// The constraints, Jacobian and Hessian are evaluated block by block on the rayon pool when called from
@@ -326,6 +326,9 @@ fn a_feasibility_start_that_needs_restoration_gives_way_to_the_next() {
     let (model, text, mut config) = setup();
     config.gait.step_duration_s = [0.8, 0.9];
     config.solver.backend = planner::config::SolverBackend::Ripopt;
+    // On the uniform mesh, where the first start needs restoration (on the default graded
+    // mesh ripopt solves the first start without it).
+    config.collocation.mesh_grading = 0.0;
     let (mut starts, mut iterations) = (0, 0);
     let mut per_start: Vec<usize> = Vec::new();
     let mut in_feasibility = false;
@@ -489,15 +492,72 @@ fn the_native_backend_plans_a_gait_that_verifies() {
         "{}",
         g.solver.solver
     );
+    // 0.020741 on the uniform mesh of 20 intervals: that gait's orbit stepped 10 % slower than
+    // planned; the graded mesh's plan is walked as planned and costs 3 % more.
     assert!(
-        (g.cost_of_transport / 0.020741 - 1.0).abs() < 1e-3,
+        (g.cost_of_transport / 0.021386 - 1.0).abs() < 1e-3,
         "CoT {}",
         g.cost_of_transport
     );
-    let report = planner::verify::verify_gait(&model, g, planner::verify::VerifyOptions::default())
-        .expect("verifies");
+    let report = planner::verify::assert_orbit_matches_plan(&model, g);
     println!("{report}");
-    assert!(report.passed(1e-6), "{report}");
+}
+
+/// Issue #28 item 5: the closed loop walks the plan. On robots the planner was not tuned on,
+/// ADAM with a 50 % heavier torso (20 kg) and a small ADAM generated at 0.20 / 0.20 m legs,
+/// the verified orbit's step duration and length are the plan's within 1 % with the shipped
+/// config (graded mesh of 20 intervals; measured +0.43 % and +0.50 %, where the uniform mesh
+/// gave +15.5 % and +13.4 %).
+#[test]
+fn held_out_robots_walk_their_plans_within_one_percent() {
+    let (_, text, config) = setup();
+    let heavy = text.replace("<mass value=\"13.33\"/>", "<mass value=\"20.0\"/>");
+    assert_ne!(heavy, text, "the torso mass is where the test expects it");
+    let small = model::design::generate_urdf(&model::design::DesignLengths {
+        thigh_length_m: 0.2,
+        shin_length_m: 0.2,
+    })
+    .expect("generates");
+    for (name, urdf) in [("heavy torso", heavy), ("small ADAM", small)] {
+        let model = model::PlanarModel::from_urdf_str(&urdf, name).expect("model");
+        let planned = plan_gait(&model, "robot.urdf", &urdf, &config, &mut |_| {}).expect(name);
+        let report = planner::verify::assert_orbit_matches_plan(&model, &planned.gait);
+        let (duration, length) = report.plan_mismatch();
+        println!(
+            "{name}: orbit {:.4} s, {:.4} m ({:+.2} %, {:+.2} %), |λ|max {:.4}",
+            report.step_duration_s,
+            report.step_length_m,
+            100.0 * duration,
+            100.0 * length,
+            report.spectral_radius
+        );
+    }
+}
+
+/// The 1 % check can fail, and the graded mesh is what passes it: ADAM planned on a uniform
+/// mesh of 20 intervals (the default until December 2026) verifies as a stable orbit whose
+/// steps take ~10 % longer than planned, and the accuracy check names the step duration.
+#[test]
+fn a_uniform_mesh_of_20_intervals_misses_the_plan_and_the_accuracy_check_says_so() {
+    let (model, text, mut config) = setup();
+    config.collocation.mesh_grading = 0.0;
+    let planned = plan_gait(&model, "robot.urdf", &text, &config, &mut |_| {}).expect("plans");
+    let report = planner::verify::verify_gait(
+        &model,
+        &planned.gait,
+        planner::verify::VerifyOptions::default(),
+    )
+    .expect("verifies");
+    println!("{report}");
+    assert!(
+        report.passed(1e-6),
+        "a stable orbit near the plan: {report}"
+    );
+    let (duration, _) = report.plan_mismatch();
+    assert!(duration > 0.05, "{report}");
+    let failed = report.accuracy_failures();
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    assert!(failed[0].contains("step duration"), "{failed:?}");
 }
 
 /// The interior point asks for the Jacobian and the Hessian together after an accepted step,

@@ -26,9 +26,9 @@ fn shipped_gait_is_a_stable_periodic_orbit() {
         (report.step_length_m - gait.step_length_m).abs() < 2e-3,
         "{report}"
     );
-    // One closed-loop step from the planned x⁺ is the planned step: 0.9001 s against 0.8999 s,
-    // 0.1503 m against 0.1500 m (the collocation error of N = 20; the fixed point, which that
-    // error moves by 1/(1 − |λ|max), steps in 0.991 s, within STEP_DURATION_TOLERANCE).
+    // One closed-loop step from the planned x⁺ is the planned step: 0.9000 s against 0.9000 s,
+    // 0.15002 m against 0.1500 m (the collocation error of the graded mesh of N = 20; the fixed
+    // point, which that error moves by 1/(1 − |λ|max), steps in 0.904 s).
     let planned = report.planned_step;
     assert_eq!(
         (planned.duration_s, planned.length_m),
@@ -44,6 +44,10 @@ fn shipped_gait_is_a_stable_periodic_orbit() {
         "{report}"
     );
     assert!(report.failures(1e-6).is_empty(), "{report}");
+    // The orbit is the plan within 1 % (issue #28 item 5: 10 % on the uniform mesh of N = 20).
+    assert!(report.accuracy_failures().is_empty(), "{report}");
+    let (duration, length) = report.plan_mismatch();
+    assert!(duration.abs() < 0.01 && length.abs() < 0.01, "{report}");
 }
 
 /// A 0.05 rad shift of the swing hip's Bézier coefficients makes the robot fall within the first
@@ -239,9 +243,9 @@ fn shipped_codesigned_gait_is_stable_on_its_generated_urdf() {
         "/../configs/gaits/adam_codesign.json"
     ));
     let (gait, model) = load_gait_and_robot(path).expect("co-designed gait and URDF load");
-    let report = verify_gait(&model, &gait, VerifyOptions::default()).expect("verifies");
+    // A stable orbit, walked as planned within 1 % (re-planned on the graded mesh).
+    let report = planner::verify::assert_orbit_matches_plan(&model, &gait);
     println!("{report}");
-    assert!(report.passed(1e-6), "{report}");
     let urdf = std::fs::read_to_string(path.parent().expect("folder").join(&gait.robot.urdf))
         .expect("URDF");
     let regenerated = model::design::generate_urdf(&gait.design).expect("generates");

@@ -12,8 +12,9 @@ pub(super) enum Kind {
     OutputDynamics(usize),
     /// y and ẏ of output o at the first point.
     OutputStart(usize),
-    /// Hermite–Simpson rows of one reduced coordinate in one interval.
-    Interval,
+    /// Hermite–Simpson rows of one reduced coordinate in interval i (carries i: its length is
+    /// its own fraction of T).
+    Interval(usize),
     /// p − n − u q̇ of one actuator at one point (carries the actuator's reduced index).
     Power(usize),
     /// Swing-foot height.
@@ -39,7 +40,7 @@ impl Kind {
             Kind::PhaseLift => "phase variable".into(),
             Kind::OutputDynamics(o) => format!("virtual constraint {o} (output dynamics)"),
             Kind::OutputStart(o) => format!("virtual constraint {o} at the step start"),
-            Kind::Interval => "collocation defects".into(),
+            Kind::Interval(_) => "collocation defects".into(),
             Kind::Power(c) => format!("power slacks (coordinate {c})"),
             Kind::SwingHeight => "swing-foot clearance".into(),
             Kind::SwingEnd => "swing foot at impact (guard, step length, descent)".into(),

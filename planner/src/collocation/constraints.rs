@@ -83,10 +83,10 @@ impl HzdProblem {
             // Swing foot height.
             if k > 0 {
                 let vars: Vec<usize> = (l.q(k)..l.q(k) + nq).collect();
-                // Interior points keep the swing foot above a parabola that peaks at the
-                // mid-step clearance: z ≥ 0 alone let the optimum graze the ground (0.04 mm
+                // Interior points keep the swing foot above a parabola in time that peaks at
+                // the mid-step clearance: z ≥ 0 alone let the optimum graze the ground (0.04 mm
                 // below it between points near τ = 0.85) and the robot tripped in simulation.
-                let s = k as f64 / last as f64;
+                let s = l.time_fraction(k);
                 let (lo, hi) = if k == last {
                     (0.0, 0.0)
                 } else {
@@ -129,7 +129,7 @@ impl HzdProblem {
                     l.ddq(e) + j,
                     l.duration(),
                 ];
-                self.add(Kind::Interval, vars, &[0.0; 4], &[0.0; 4]);
+                self.add(Kind::Interval(i), vars, &[0.0; 4], &[0.0; 4]);
             }
         }
         let mut vars = self.point_vars(last, false);

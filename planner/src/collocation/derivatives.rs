@@ -90,7 +90,7 @@ impl HzdProblem {
             Kind::Dynamics
                 | Kind::OutputDynamics(_)
                 | Kind::OutputStart(_)
-                | Kind::Interval
+                | Kind::Interval(_)
                 | Kind::Power(_)
                 | Kind::SwingHeight
                 | Kind::SwingEnd

@@ -26,6 +26,27 @@ pub struct Layout {
     /// Whether each point has the power slacks p, n (the cost-of-transport problem does; the
     /// feasibility problem, which has no cost on them, does not).
     pub slacks: bool,
+    /// The nodes' times as fractions of the step duration T: N + 1 increasing values from 0
+    /// to 1 ([`mesh_nodes`]); interval i spans `mesh[i]..mesh[i + 1]`.
+    pub mesh: Vec<f64>,
+}
+
+/// The node times of N intervals, as fractions of the step duration: s(i/N) with
+/// s(u) = u − g sin(2πu)/(2π) for the grading g ∈ [0, 1) (`[collocation] mesh_grading`).
+/// g = 0 is the uniform mesh; with g > 0 the first and last intervals are 1 − g times the
+/// uniform length and the middle ones up to 1 + g times, because Hermite–Simpson's local
+/// error (∝ h⁵) on a gait is largest at the step's ends (planner/CODESIGN.md, "Plan accuracy").
+pub fn mesh_nodes(intervals: usize, grading: f64) -> Vec<f64> {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    (0..=intervals)
+        .map(|i| {
+            if i == intervals {
+                return 1.0;
+            }
+            let u = i as f64 / intervals as f64;
+            u - grading * (two_pi * u).sin() / two_pi
+        })
+        .collect()
 }
 
 impl Layout {
@@ -135,14 +156,102 @@ impl Layout {
     pub fn is_empty(&self) -> bool {
         false
     }
-    /// Simpson weight of point k in ∫ ≈ h/6 Σ c_k f_k.
-    pub fn simpson_weight(&self, k: usize) -> f64 {
-        if k % 2 == 1 {
-            4.0
-        } else if k == 0 || k == 2 * self.intervals {
-            1.0
+    /// Interval i's share of the step duration (its h is T times this).
+    pub fn interval_fraction(&self, i: usize) -> f64 {
+        self.mesh[i + 1] - self.mesh[i]
+    }
+
+    /// Point k's time as a fraction of the step duration (a midpoint halfway through its
+    /// interval).
+    pub fn time_fraction(&self, k: usize) -> f64 {
+        let i = k / 2;
+        if k % 2 == 0 {
+            self.mesh[i]
         } else {
-            2.0
+            0.5 * (self.mesh[i] + self.mesh[i + 1])
         }
     }
+
+    /// Simpson weight c_k of point k in ∫ ≈ T/(6N) Σ c_k f_k: on a uniform mesh 1, 4, 2, …,
+    /// 4, 1; on a graded one each interval's 1, 4, 1 scaled by N times its fraction of T.
+    pub fn simpson_weight(&self, k: usize) -> f64 {
+        let n = self.intervals as f64;
+        let i = k / 2;
+        if k % 2 == 1 {
+            4.0 * n * self.interval_fraction(i)
+        } else {
+            let before = if i > 0 {
+                self.interval_fraction(i - 1)
+            } else {
+                0.0
+            };
+            let after = if i < self.intervals {
+                self.interval_fraction(i)
+            } else {
+                0.0
+            };
+            n * (before + after)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn layout(intervals: usize, grading: f64) -> Layout {
+        Layout {
+            nq: 1,
+            nu: 1,
+            m: 1,
+            degree: 2,
+            intervals,
+            stride: 7,
+            design: 0,
+            slacks: false,
+            mesh: mesh_nodes(intervals, grading),
+        }
+    }
+
+    /// The graded mesh runs from 0 to 1, increasing, with end intervals 1 − g times the uniform
+    /// length; grading 0 is the uniform mesh.
+    #[test]
+    fn the_graded_mesh_is_increasing_and_shortest_at_the_ends() {
+        for g in [0.0, 0.5, 0.8, MAX_GRADING_FOR_TESTS] {
+            let l = layout(20, g);
+            assert_eq!((l.mesh[0], l.mesh[20]), (0.0, 1.0));
+            assert!((0..20).all(|i| l.interval_fraction(i) > 0.0), "{g}");
+            let end = l.interval_fraction(0) * 20.0;
+            // s(1/N)·N = 1 − g·sin(2π/N)/(2π/N): 1 − g to within 1.7 % of g at N = 20.
+            assert!((end - (1.0 - g)).abs() < 0.017 * g + 1e-12, "{g}: {end}");
+            assert!((l.interval_fraction(19) - l.interval_fraction(0)).abs() < 1e-12);
+            assert!(l.interval_fraction(10) >= l.interval_fraction(0));
+        }
+        let u = layout(20, 0.0);
+        assert!((0..20).all(|i| (u.interval_fraction(i) - 0.05).abs() < 1e-15));
+        assert_eq!(u.time_fraction(3), 0.5 * (u.mesh[1] + u.mesh[2]));
+    }
+
+    /// Simpson's weights integrate cubics exactly on any mesh: Σ c_k f(t_k) T/(6N) = ∫₀ᵀ f.
+    #[test]
+    fn simpson_weights_integrate_cubics_exactly_on_a_graded_mesh() {
+        for g in [0.0, 0.8] {
+            let l = layout(7, g);
+            let t_s = 0.9;
+            let f = |t: f64| 1.0 - 2.0 * t + 3.0 * t * t - 4.0 * t * t * t;
+            let sum: f64 = (0..l.points())
+                .map(|k| l.simpson_weight(k) * f(t_s * l.time_fraction(k)))
+                .sum();
+            let quad = sum * t_s / (6.0 * l.intervals as f64);
+            let exact = t_s - t_s.powi(2) + t_s.powi(3) - t_s.powi(4);
+            assert!((quad - exact).abs() < 1e-13, "{g}: {quad} vs {exact}");
+        }
+        let u = layout(3, 0.0);
+        let weights: Vec<f64> = (0..u.points()).map(|k| u.simpson_weight(k)).collect();
+        for (w, expected) in weights.iter().zip([1.0, 4.0, 2.0, 4.0, 2.0, 4.0, 1.0]) {
+            assert!((w - expected).abs() < 1e-14, "{weights:?}");
+        }
+    }
+
+    const MAX_GRADING_FOR_TESTS: f64 = crate::config::MAX_MESH_GRADING;
 }

@@ -3,7 +3,9 @@
 //!
 //! # Transcription
 //! N intervals, 2N + 1 points k (even k: nodes, odd k: midpoints), step duration T a variable and
-//! h = T/N. At every point: reduced state q_r, q̇_r, q̈_r (pinned stance, see [`crate::biped`]),
+//! interval i of length h_i = T·w_i, its fraction w_i fixed by `[collocation] mesh_grading`
+//! (uniform w_i = 1/N at grading 0; the default grades them shorter at the step's ends, where
+//! the transcription error is largest: [`mesh_nodes`], planner/CODESIGN.md "Plan accuracy"). At every point: reduced state q_r, q̇_r, q̈_r (pinned stance, see [`crate::biped`]),
 //! torques u and, in the cost-of-transport problem, the positive/negative parts p, n of each
 //! actuator's power (the feasibility problem has no cost and no power slacks). Global variables: the
 //! Bézier coefficients α (m × (b+1)), θ⁺ and θ⁻ of the phase variable, T, and the step length d.
@@ -88,5 +90,5 @@ mod sparsity;
 
 pub use constraints::{ConstraintGroup, ConstraintGroups};
 pub use cost::FEASIBILITY_TORQUE_WEIGHT;
-pub use layout::{Layout, ACC_SCALE, TORQUE_SCALE};
+pub use layout::{mesh_nodes, Layout, ACC_SCALE, TORQUE_SCALE};
 pub use problem::{Codesign, HzdProblem};

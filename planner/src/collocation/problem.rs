@@ -155,6 +155,10 @@ impl HzdProblem {
             stride: 3 * biped.nq() + if slacks { 3 } else { 1 } * biped.nu() + 3,
             design: if design.is_some() { 2 } else { 0 },
             slacks,
+            mesh: super::layout::mesh_nodes(
+                config.collocation.intervals,
+                config.collocation.mesh_grading,
+            ),
         };
         if config.cost.weights.len() != layout.nu {
             return Err(crate::PlannerError::InvalidField {

@@ -172,8 +172,8 @@ impl HzdProblem {
                     out[0] = (ddy + dy * (2.0 * eps) + y * (eps * eps)) / eps;
                 }
             }
-            Kind::Interval => {
-                let h = z[9] / l.intervals as f64;
+            Kind::Interval(i) => {
+                let h = z[9] * l.interval_fraction(i);
                 let (qa, qm, qe, va, vm, ve) = (z[0], z[1], z[2], z[3], z[4], z[5]);
                 let (aa, am, ae) = (z[6] * ACC_SCALE, z[7] * ACC_SCALE, z[8] * ACC_SCALE);
                 out[0] = qm - (qa + qe) * 0.5 - h * (va - ve) / 8.0;

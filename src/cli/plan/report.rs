@@ -173,6 +173,112 @@ impl fmt::Display for PlanSummary<'_> {
     }
 }
 
+/// Where the wall time of one whole `adam plan` went, s, and its CPU time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct CommandTimes {
+    /// Reading the robot and the config.
+    pub(crate) load_s: f64,
+    /// Building the problems and the starts' guesses.
+    pub(crate) problems_s: f64,
+    /// The feasibility solves.
+    pub(crate) feasibility_s: f64,
+    /// The cost-of-transport solve.
+    pub(crate) cost_s: f64,
+    /// The feed-forward table along the closed-loop orbit.
+    pub(crate) feedforward_s: f64,
+    /// The gait file: its content and writing it.
+    pub(crate) write_s: f64,
+    /// The verification (`adam gait check`'s work).
+    pub(crate) verify_s: f64,
+    /// The whole command.
+    pub(crate) total_s: f64,
+    /// CPU time of the whole command, all threads (`None`: not measurable here).
+    pub(crate) cpu_s: Option<f64>,
+}
+
+impl CommandTimes {
+    /// The phases' names and wall times, in order.
+    fn phases(&self) -> [(&'static str, f64); 7] {
+        [
+            ("load", self.load_s),
+            ("problems", self.problems_s),
+            ("feasibility", self.feasibility_s),
+            ("cost", self.cost_s),
+            ("feed-forward", self.feedforward_s),
+            ("gait file", self.write_s),
+            ("verification", self.verify_s),
+        ]
+    }
+
+    /// The column titles of [`Self::row`].
+    pub(crate) fn header() -> String {
+        let mut h: String = Self::default()
+            .phases()
+            .iter()
+            .map(|(name, _)| format!("{name:>13}"))
+            .collect();
+        h.push_str(&format!("{:>13}{:>13}", "total wall", "total CPU"));
+        h
+    }
+
+    /// One row of seconds under [`Self::header`].
+    pub(crate) fn row(&self) -> String {
+        let mut r: String = self
+            .phases()
+            .iter()
+            .map(|(_, s)| format!("{s:>13.3}"))
+            .collect();
+        r.push_str(&format!(
+            "{:>13.3}{:>13}",
+            self.total_s,
+            self.cpu_s.map_or("-".into(), |c| format!("{c:.2}"))
+        ));
+        r
+    }
+
+    /// Each phase's median over `runs` (so the phases need not add up to the median total).
+    pub(crate) fn median(runs: &[CommandTimes]) -> CommandTimes {
+        let median = |f: &dyn Fn(&CommandTimes) -> f64| {
+            let mut v: Vec<f64> = runs.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+        };
+        let cpu: Option<Vec<f64>> = runs.iter().map(|r| r.cpu_s).collect();
+        CommandTimes {
+            load_s: median(&|r| r.load_s),
+            problems_s: median(&|r| r.problems_s),
+            feasibility_s: median(&|r| r.feasibility_s),
+            cost_s: median(&|r| r.cost_s),
+            feedforward_s: median(&|r| r.feedforward_s),
+            write_s: median(&|r| r.write_s),
+            verify_s: median(&|r| r.verify_s),
+            total_s: median(&|r| r.total_s),
+            cpu_s: cpu.map(|mut c| {
+                c.sort_by(f64::total_cmp);
+                c[c.len() / 2]
+            }),
+        }
+    }
+}
+
+impl fmt::Display for CommandTimes {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let phases: Vec<String> = self
+            .phases()
+            .iter()
+            .map(|(name, s)| format!("{name} {s:.3}"))
+            .collect();
+        write!(
+            f,
+            "time by phase (wall s): {} | whole command {:.3} s wall, {} CPU",
+            phases.join(", "),
+            self.total_s,
+            self.cpu_s
+                .map_or("unmeasured".into(), |c| format!("{c:.2} s"))
+        )
+    }
+}
+
 /// The one-line verification `adam plan` prints of its gait (`adam gait check`'s figures).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct OrbitCheck {
@@ -330,6 +436,54 @@ mod tests {
             "{text}"
         );
         assert!(!text.contains("in all"), "{text}");
+    }
+
+    /// The phases are printed in order with the whole command's wall and CPU time, and the
+    /// median takes each column's own median.
+    #[test]
+    fn command_times_print_every_phase_and_take_medians_by_column() {
+        let run = |k: f64, cpu: Option<f64>| CommandTimes {
+            load_s: 0.001 * k,
+            problems_s: 0.01 * k,
+            feasibility_s: 0.2 * k,
+            cost_s: 0.3 * k,
+            feedforward_s: 0.05 * k,
+            write_s: 0.002 * k,
+            verify_s: 0.1 * k,
+            total_s: 0.7 * k,
+            cpu_s: cpu,
+        };
+        let line = run(1.0, Some(1.25)).to_string();
+        for part in [
+            "load 0.001",
+            "problems 0.010",
+            "feasibility 0.200",
+            "cost 0.300",
+            "feed-forward 0.050",
+            "gait file 0.002",
+            "verification 0.100",
+            "0.700 s wall, 1.25 s CPU",
+        ] {
+            assert!(line.contains(part), "{part}: {line}");
+        }
+        let m = CommandTimes::median(&[
+            run(3.0, Some(3.0)),
+            run(1.0, Some(1.0)),
+            run(2.0, Some(2.0)),
+        ]);
+        assert_eq!(m, run(2.0, Some(2.0)));
+        assert_eq!(
+            CommandTimes::median(&[run(1.0, None), run(2.0, Some(2.0))]).cpu_s,
+            None
+        );
+        assert!(CommandTimes::header().contains("verification"));
+        assert_eq!(
+            CommandTimes::header().len(),
+            run(1.0, None).row().len(),
+            "{}\n{}",
+            CommandTimes::header(),
+            run(1.0, None).row()
+        );
     }
 
     #[test]
