@@ -1,6 +1,8 @@
 //! `Controller::tick` allocates nothing: a counting global allocator watches this test
 //! thread over thousands of ticks through Ramp, Stand, Walk (its launch in double support,
-//! both phase sources, stance switches included), Stop (the braking step) and Stand again. No locks: by construction `Controller` owns only plain data (no `Mutex`,
+//! both phase sources, stance switches included), Stop (the braking step) and Stand again; and
+//! with treadmill speed control (a gait library, operator `belt` and `nudge` commands, the
+//! regulator switching to interpolated library gaits at each impact). No locks: by construction `Controller` owns only plain data (no `Mutex`,
 //! `RwLock`, channel or `Arc` in `control/`, `estimator.rs`, `safety.rs`);
 //! `controller_is_owned_plain_data` checks it is `'static + Clone + Send + Sync` (no borrowed
 //! shared state).
@@ -53,8 +55,27 @@ fn counted<R>(f: impl FnOnce() -> R) -> (R, u64) {
     (r, COUNT.with(|c| c.get()))
 }
 
+/// The test gait library (`tests/fixtures/library/`), sorted by speed.
+fn library(setup: Setup) -> Setup {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/library");
+    let mut gaits: Vec<model::gait::GaitFile> = std::fs::read_dir(&dir)
+        .expect("library fixtures")
+        .map(|e| model::gait::GaitFile::load(e.expect("entry").path()).expect("gait"))
+        .collect();
+    gaits.sort_by(|a, b| a.speed_mps.total_cmp(&b.speed_mps));
+    let origins: Vec<String> = (0..gaits.len()).map(|k| format!("library {k}")).collect();
+    setup.with_library(gaits, &origins).expect("library")
+}
+
 fn walk_without_allocating(phase: PhaseSource) {
+    walk_without_allocating_with(phase, false);
+}
+
+fn walk_without_allocating_with(phase: PhaseSource, with_library: bool) {
     let mut setup = Setup::shipped().expect("shipped setup");
+    if with_library {
+        setup = library(setup);
+    }
     setup.config.walk.phase = phase;
     // No robot here: with the state-based phase the step never ends; the stall check
     // (step timeout) is not what this test is about.
@@ -70,6 +91,7 @@ fn walk_without_allocating(phase: PhaseSource) {
     let mut steps = 0;
     let mut walk_ticks = 0;
     let mut stood_after_stop = false;
+    let mut speed_updates = 0;
     let ((), allocations) = counted(|| {
         for k in 0..10_000u32 {
             for slot in 0..4 {
@@ -88,7 +110,9 @@ fn walk_without_allocating(phase: PhaseSource) {
             });
             input.operator = match k {
                 1 => Some(OperatorCommand::Start),
+                2 if with_library => Some(OperatorCommand::Belt { speed_mps: 0.3 }),
                 2500 => Some(OperatorCommand::Walk),
+                4000 if with_library => Some(OperatorCommand::Nudge { delta_mps: 0.025 }),
                 7000 => Some(OperatorCommand::Stop),
                 _ => None,
             };
@@ -100,6 +124,7 @@ fn walk_without_allocating(phase: PhaseSource) {
                 stood_after_stop = true;
             }
             steps = out.status.steps;
+            speed_updates += u32::from(out.status.speed_update);
         }
     });
     assert_eq!(out.status.trip, None);
@@ -111,7 +136,18 @@ fn walk_without_allocating(phase: PhaseSource) {
         assert!(steps >= 3, "stance switches exercised: {steps}");
         assert!(stood_after_stop);
     }
+    if with_library {
+        // Impacts ran the regulator and switched to interpolated library gaits.
+        assert!(speed_updates >= 3, "{speed_updates} speed updates");
+        assert!(out.status.speed.library_mps.is_finite());
+        assert_eq!(out.status.speed.offset_mps, 0.025);
+    }
     assert_eq!(allocations, 0, "Controller::tick allocated");
+}
+
+#[test]
+fn tick_allocates_nothing_with_speed_control_switching_library_gaits() {
+    walk_without_allocating_with(PhaseSource::TimeBased, true);
 }
 
 #[test]
