@@ -1,7 +1,11 @@
 //! `adam bench plan` and `adam bench check`: the plan and the gait check repeated, a row per
-//! run and the medians.
+//! run and the medians; `adam bench treadmill` ([`treadmill`]): the treadmill scenarios of
+//! issue #29 over seeds, a table per scenario.
 
 mod report;
+mod treadmill;
+
+pub(crate) use treadmill::treadmill;
 
 use crate::cli::plan::PhaseSeconds;
 use crate::cli::shipped;
@@ -37,6 +41,23 @@ pub(crate) enum BenchWhat {
         runs: usize,
         /// The gait file.
         #[arg(default_value = "configs/gaits/adam_walk.json")]
+        gait: PathBuf,
+    },
+    /// The treadmill scenarios on the simulated robot, in parallel, a table each: belts at
+    /// 0.15–0.35 m/s for 60 s, a belt step 0.20 → 0.30 → 0.20 m/s, pushes at five points of the
+    /// step (and the largest ridden through each way), start and restart.
+    Treadmill {
+        /// Seeds, e.g. `1,2,3` (default 1–5; with --quick 1,2).
+        #[arg(long, value_delimiter = ',')]
+        seeds: Option<Vec<u64>>,
+        /// A shorter set: 20 s belts, a 30 s belt step, three push points, 3 bisections.
+        #[arg(long)]
+        quick: bool,
+        /// Runtime config (TOML).
+        #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
+        config: PathBuf,
+        /// Gait file (JSON); default: the co-designed ADAM's.
+        #[arg(long, default_value = runtime::DEFAULT_GAIT)]
         gait: PathBuf,
     },
 }
