@@ -98,7 +98,8 @@ pub enum Restart {
     /// As [`Restart::FromStand`], then Stop at 8 s (the braking step, Stand) and Walk again at
     /// 11 s on the moving belt; 20 s.
     StopAndWalkAgain,
-    /// From Stand, Walk at 3 s on a belt at rest; the belt ramps to 0.25 m/s from 6 s; 20 s.
+    /// From Stand, Walk at 3 s on a belt at rest; the belt ramps to 0.25 m/s from 4 s (on a
+    /// belt at rest the robot walks off its front within some 4 s); 20 s.
     BeltAfterWalk,
 }
 
@@ -138,7 +139,7 @@ pub fn start_restart(case: Restart, seed: u64) -> SimWalkOptions {
             ],
         ),
         Restart::BeltAfterWalk => (
-            vec![(0.0, 0.0), (6.0, PUSH_BELT_MPS)],
+            vec![(0.0, 0.0), (4.0, PUSH_BELT_MPS)],
             vec![(3.0, OperatorCommand::Walk)],
         ),
     };

@@ -1,5 +1,5 @@
 //! `adam bench plan` and `adam bench check`: the plan and the gait check repeated, a row per
-//! run and the medians; `adam bench treadmill` ([`treadmill`]): the treadmill scenarios of
+//! run and the medians; `adam bench treadmill` ([`mod@treadmill`]): the treadmill scenarios of
 //! issue #29 over seeds, a table per scenario.
 
 mod report;

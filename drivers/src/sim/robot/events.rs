@@ -95,7 +95,7 @@ pub enum SimEvent {
         /// What touched the ground or tipped.
         what: FallCause,
     },
-    /// A step failed; the simulation is frozen (see [`RobotSim::step`]).
+    /// A step failed; the simulation is frozen (see [`RobotSim::step`](super::RobotSim::step)).
     Fault {
         /// Time \[s\].
         t_s: f64,
