@@ -51,7 +51,7 @@ Files:
 enum Command {
     /// Walk the shipped gait for 30 s on the simulated treadmill through the CAN codec path,
     /// log to `logs/<timestamp>.mcap`, print a summary.
-    Demo,
+    Demo(run::DemoArgs),
     /// Walk a gait with the real-time runtime on the simulated robot or on the robot over CAN.
     Run(run::RunArgs),
     /// Walk the simulated robot for a long time under random faults; after each trip reset and
@@ -108,7 +108,7 @@ fn main() -> std::process::ExitCode {
 /// Runs the command.
 fn dispatch(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Demo => run::demo(),
+        Command::Demo(args) => run::demo(&args),
         Command::Run(args) => run::run(args),
         Command::Soak(args) => run::soak(args),
         Command::Plan(args) => plan::plan(&args),
@@ -138,6 +138,15 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Bench {
             what: BenchWhat::Library(args),
         } => bench::library(&args),
+        Command::Bench {
+            what:
+                BenchWhat::Treadmill {
+                    seeds,
+                    quick,
+                    config,
+                    gait,
+                },
+        } => bench::treadmill(seeds, quick, &config, &gait),
         Command::Plot {
             what:
                 PlotWhat::Portrait {

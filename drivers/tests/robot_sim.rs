@@ -424,7 +424,7 @@ fn com_velocity_mps(s: &RobotSim) -> [f64; 2] {
     let c0 = s.model().center_of_mass(s.q()).unwrap();
     let c1 = s.model().center_of_mass(&q1).unwrap();
     [
-        (c1[0] - c0[0]) / eps - s.config().belt_speed_mps,
+        (c1[0] - c0[0]) / eps - s.belt_speed_mps(),
         (c1[1] - c0[1]) / eps,
     ]
 }

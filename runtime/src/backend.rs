@@ -26,6 +26,23 @@ pub trait Backend: MotorBus + Imu {
     fn true_belt_position_m(&self) -> Option<f64> {
         None
     }
+
+    /// Sees where the controller is in its walk after each tick: a simulator starts faults at a
+    /// phase point of a step with it ([`crate::sim::faults::Fault::PushAtPhase`]). Never feeds
+    /// back into the controller; hardware ignores it. Called in the tick: must not allocate or
+    /// block.
+    fn observe(&mut self, _progress: &WalkProgress) {}
+}
+
+/// Where the controller is in its walk after a tick (what [`Backend::observe`] sees).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct WalkProgress {
+    /// The controller is in Walk.
+    pub walking: bool,
+    /// Completed steps since Walk began.
+    pub steps: u32,
+    /// Phase τ of the present step (unclamped).
+    pub phase: f64,
 }
 
 /// An IMU at rest at a fixed pitch (for tests and bench runs without robot dynamics), its gyro

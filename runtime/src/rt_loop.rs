@@ -15,7 +15,7 @@
 //! asks for `mlockall` and SCHED_FIFO when the config says so; refusals are warnings, reported
 //! in [`RunSummary::realtime`].
 
-use crate::backend::Backend;
+use crate::backend::{Backend, WalkProgress};
 use crate::control::{
     CommandMode, ControlState, Controller, JointCommand, OperatorCommand, TickInput, TickOutput,
 };
@@ -522,6 +522,11 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
         controller.tick(&input, &mut out);
         let compute_ns = rt_sys::monotonic_ns().saturating_sub(c0);
         histogram.add(compute_ns);
+        backend.observe(&WalkProgress {
+            walking: out.status.state == ControlState::Walk,
+            steps: out.status.steps,
+            phase: out.status.phase,
+        });
         for (i, cmd) in commands.iter_mut().enumerate() {
             *cmd = to_a1(ids[i], &out.commands[slot_of[i]]);
         }

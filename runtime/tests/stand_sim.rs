@@ -16,6 +16,8 @@ fn the_simulated_robot_ramps_stands_walks_from_stand_stops_and_stands_again() {
     let setup = Setup::shipped().expect("setup");
     let mut walk = SimWalkOptions::new(7.0);
     walk.belt_speed_mps = Some(0.0);
+    // 22 s of walking on a belt at rest covers 3.5 m: an endless belt.
+    walk.belt_length_m = f64::INFINITY;
     let mut backend = sim_backend(&setup, &walk).expect("backend");
     let q0 = setup
         .gait

@@ -5,7 +5,9 @@
 //! * `wire`: CAN faults for the whole run (loss, corruption, delay), applied by
 //!   [`drivers::sim::bus::SimBus`];
 //! * `events`: faults at given times for given durations ([`Fault`]: a silent, hot or faulted
-//!   motor, IMU dropout, spike or freeze, loop overruns, a belt-speed step, a push);
+//!   motor, IMU dropout, spike or freeze, loop overruns, a belt-speed step, a push, a push at
+//!   a phase point of the next step: `{ kind = "push_at_phase", force_x_n = -20.0,
+//!   force_z_n = 0.0, phase = 0.3 }`);
 //! * `random`: faults drawn from a list at exponentially distributed intervals (the soak).
 //!
 //! [`FaultProfile::schedule`] turns the events and the random part into one time-sorted list
@@ -120,6 +122,17 @@ pub enum Fault {
         /// Upward force, N.
         force_z_n: f64,
     },
+    /// [`Fault::Push`] landing at a phase point of a step: from the fault's start, the push
+    /// waits for the next step to begin and acts when the controller's phase reaches `phase`,
+    /// for the fault's duration.
+    PushAtPhase {
+        /// Forward force, N.
+        force_x_n: f64,
+        /// Upward force, N.
+        force_z_n: f64,
+        /// Phase τ of the step at which the push starts, in `[0, 1)`.
+        phase: f64,
+    },
 }
 
 impl Fault {
@@ -135,6 +148,7 @@ impl Fault {
             Fault::Overrun { .. } => "overrun",
             Fault::BeltSpeed { .. } => "belt_speed",
             Fault::Push { .. } => "push",
+            Fault::PushAtPhase { .. } => "push_at_phase",
         }
     }
 
@@ -165,6 +179,16 @@ impl Fault {
                 force_x_n,
                 force_z_n,
             } => finite("force_x_n", force_x_n).or_else(|| finite("force_z_n", force_z_n)),
+            Fault::PushAtPhase {
+                force_x_n,
+                force_z_n,
+                phase,
+            } => finite("force_x_n", force_x_n)
+                .or_else(|| finite("force_z_n", force_z_n))
+                .or_else(|| {
+                    (!(0.0..1.0).contains(&phase))
+                        .then(|| ("phase", phase.to_string(), "must be in [0, 1)"))
+                }),
             _ => None,
         }
     }

@@ -1,7 +1,13 @@
 //! The loop on the simulated ADAM: the runner ([`run`]: walks, the soak, walk metrics from
 //! ground truth), fault profiles ([`faults`]: wire faults, scheduled and random faults) and
-//! their injection into the simulated robot ([`inject`]).
+//! their injection into the simulated robot ([`inject`]), and what a run is told in time
+//! ([`treadmill`]: the belt's speed profile, pushes, scripted operator commands); the report of
+//! a run ([`report`]) and the treadmill scenarios of the bench and the acceptance tests
+//! ([`scenarios`]).
 
 pub mod faults;
 pub mod inject;
+pub mod report;
 pub mod run;
+pub mod scenarios;
+pub mod treadmill;

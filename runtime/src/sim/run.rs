@@ -3,11 +3,21 @@
 //! its torso IMU as the drivers' [`Imu`](drivers::imu::Imu), on a treadmill, under a simulated clock.
 //!
 //! ```text
-//! gait file initial_state (q⁺, q̇⁺) ─▶ RobotSim (belt = gait speed) ─▶ SimBus<RobotSim>
-//!   runtime::run(start_walking) ─▶ Controller in Walk from tick 0 ─▶ RunSummary
-//!   RobotSim events (touchdowns, fall) + RunSummary ─▶ SimWalkReport
+//! gait file initial_state (q⁺, q̇⁺) ─▶ RobotSim (belt = gait speed, or a BeltProfile) ─▶ SimBus<RobotSim>
+//!   ─▶ FaultySim (faults, the belt profile, pushes at a phase, the truth every 10 ms)
+//!   runtime::run(start_walking | script) ─▶ Controller in Walk from tick 0 (or from Stand) ─▶ RunSummary
+//!   RobotSim events (touchdowns, fall) + truth + RunSummary ─▶ SimWalkReport (up to any fall)
 //! ```
 //! `adam demo`, `adam run --backend sim` and the end-to-end tests call [`walk`].
+//!
+//! # The treadmill
+//! The belt is a moving ground of [`SimWalkOptions::belt_length_m`] (1.6 m) with the robot at
+//! its centre at the start; its speed is constant ([`SimWalkOptions::belt_speed_mps`], the
+//! gait's by default) or follows a [`BeltProfile`] (targets in time, ramped at
+//! [`SimWalkOptions::belt_acceleration_mps2`]). A stance foot past either end is a fall
+//! (`off the back of the belt`). The report carries the truth: the belt speed and the hip's
+//! position on the belt at each step ([`StepRecord`]), every 10 ms ([`TruthSample`]) and at
+//! the end or the fall.
 //!
 //! # Faults and the soak
 //! With [`SimWalkOptions::faults`] the backend is a [`FaultySim`]: before each exchange it starts
@@ -20,18 +30,24 @@
 //! in the gait's post-impact state, walking at once, and counts trips by reason.
 //!
 //! The run starts in the gait's planned post-impact state (the robot already walking at the
-//! gait speed, its first stance foot just down), not from standing, so that every step of the
-//! run is on the gait's orbit. Starting from Stand works too (the controller's launch; see
-//! `runtime/tests/stand_sim.rs`): its first steps are quicker and converge to the orbit over
-//! some 20 steps.
+//! gait speed, its first stance foot just down), so that every step of the run is on the
+//! gait's orbit; or, with [`SimStart::Stand`], standing at rest in the gait's first pose, the
+//! controller ramped to Stand by a Start at `t = 0` and walked by the
+//! [`SimWalkOptions::script`] (the controller's launch; see `runtime/tests/stand_sim.rs`: its
+//! first steps are quicker and converge to the orbit over some 20 steps).
 
 use crate::backend::Backend;
-use crate::rt_loop::{LoopOptions, MonotonicClock, RunSummary};
+use crate::control::OperatorCommand;
+use crate::rt_loop::{LoopOptions, MonotonicClock};
 use crate::sim::faults::{Fault, FaultProfile};
 use crate::sim::inject::{FaultClock, FaultySim};
+pub use crate::sim::report::{SimWalkReport, StepRecord, TruthSample};
+use crate::sim::treadmill::BeltProfile;
 use crate::{Result, RuntimeError, Setup};
 use drivers::imu::ImuNoise;
-use drivers::sim::robot::{Boom, FallCause, LegJoint, RobotSim, RobotSimConfig, SimEvent};
+use drivers::sim::robot::{
+    Boom, LegJoint, RobotSim, RobotSimConfig, DEFAULT_BELT_ACCELERATION_MPS2, DEFAULT_BELT_LENGTH_M,
+};
 use drivers::sim::{
     bus::{SimBus, SimConfig},
     firmware::{A1Model, SimMotor},
@@ -47,6 +63,17 @@ pub struct SimWalkOptions {
     pub duration_s: f64,
     /// Treadmill belt speed, m/s (`None`: the gait's speed, so the robot stays in place).
     pub belt_speed_mps: Option<f64>,
+    /// The belt's speed profile (replaces `belt_speed_mps`; [`BeltProfile`]).
+    pub belt_profile: Option<BeltProfile>,
+    /// The belt's ramp acceleration, m/s² (default 0.5).
+    pub belt_acceleration_mps2: f64,
+    /// The belt's length, m (default 1.6; infinite: endless). The robot starts at its centre;
+    /// past either end it has fallen.
+    pub belt_length_m: f64,
+    /// How the run starts: walking in the gait's post-impact state, or standing.
+    pub start: SimStart,
+    /// Operator commands at simulated times, s (sorted by time).
+    pub script: Vec<(f64, OperatorCommand)>,
     /// Boom mass added to the torso (`None`: free torso, as the gait was planned).
     pub boom: Option<Boom>,
     /// IMU noise.
@@ -70,6 +97,11 @@ impl SimWalkOptions {
         Self {
             duration_s,
             belt_speed_mps: None,
+            belt_profile: None,
+            belt_acceleration_mps2: DEFAULT_BELT_ACCELERATION_MPS2,
+            belt_length_m: DEFAULT_BELT_LENGTH_M,
+            start: SimStart::Walk,
+            script: Vec::new(),
             boom: None,
             imu_noise: ImuNoise::default(),
             seed: 1,
@@ -81,56 +113,14 @@ impl SimWalkOptions {
     }
 }
 
-/// What the simulated walk did: the loop's summary and the simulator's ground truth.
-#[derive(Clone, Debug)]
-pub struct SimWalkReport {
-    /// The loop's summary (states, trips, tracking, tick times, log).
-    pub summary: RunSummary,
-    /// Simulated run time, s.
-    pub duration_s: f64,
-    /// Belt speed used, m/s.
-    pub belt_speed_mps: f64,
-    /// Steps: touchdowns of the swing foot (alternating sides).
-    pub steps: usize,
-    /// Touchdowns of the same foot twice in a row (scuffs, bounces).
-    pub repeated_touchdowns: usize,
-    /// Mean step length (front foot minus back foot at touchdown), m.
-    pub mean_step_length_m: f64,
-    /// Mean step duration (between alternating touchdowns, the first from t = 0), s.
-    pub mean_step_duration_s: f64,
-    /// Mean walking speed over the belt, mean step length / mean step duration, m/s.
-    pub speed_mps: f64,
-    /// World displacement of the hip over the run (positive: forward, against the belt), m.
-    /// Where in a step the run ends moves it by centimetres; see `landing_drift_m`.
-    pub drift_m: f64,
-    /// World displacement of the landing foot: the last step's touchdown point minus the
-    /// stance foot at the start (both at touchdown, the same gait phase), m; 0 without steps.
-    pub landing_drift_m: f64,
-    /// Time the run walked: up to the fall, or the whole run, s.
-    pub walked_s: f64,
-    /// The fall, if any: time, s, and cause.
-    pub fall: Option<(f64, FallCause)>,
-    /// Time the simulator faulted, s, if it did.
-    pub sim_fault_s: Option<f64>,
-    /// Friction-cone violations reported by the simulator (μ = 1; the foot stays pinned).
-    pub friction_exceeded: usize,
-    /// Distance walked over the belt: the sum of the step lengths before any fall, m.
-    pub distance_m: f64,
-    /// Faults started from the profile's schedule.
-    pub faults_started: u64,
-    /// What the simulated CAN wire did.
-    pub wire: WireStats,
-}
-
-impl SimWalkReport {
-    /// Time of the first transition into Damping, s (the trip's effect), if any.
-    pub fn damping_at_s(&self) -> Option<f64> {
-        self.summary
-            .transitions
-            .iter()
-            .find(|(_, _, to)| *to == crate::control::ControlState::Damping)
-            .map(|(t, _, _)| *t)
-    }
+/// How a simulated run starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimStart {
+    /// In Walk from the first tick, the robot in the gait's planned post-impact state.
+    Walk,
+    /// Standing on both feet in the gait's first pose at rest; the operator's Start at
+    /// `t = 0` ramps the controller to Stand (2 s), and a scripted `walk` starts the walk.
+    Stand,
 }
 
 /// The simulated robot behind its bus: the drivers' IMU on the simulator's torso (attached
@@ -163,7 +153,13 @@ pub fn sim_backend(setup: &Setup, options: &SimWalkOptions) -> Result<SimBus<Rob
             "must be positive and finite",
         ));
     }
-    let belt_speed_mps = options.belt_speed_mps.unwrap_or(setup.gait.speed_mps);
+    let belt_speed_mps = match &options.belt_profile {
+        Some(profile) => {
+            profile.validate("belt profile")?;
+            profile.initial_speed_mps()
+        }
+        None => options.belt_speed_mps.unwrap_or(setup.gait.speed_mps),
+    };
     let state = setup
         .gait
         .initial_state
@@ -173,12 +169,17 @@ pub fn sim_backend(setup: &Setup, options: &SimWalkOptions) -> Result<SimBus<Rob
         })?;
     let config = RobotSimConfig {
         belt_speed_mps,
+        belt_length_m: options.belt_length_m,
+        belt_acceleration_mps2: options.belt_acceleration_mps2,
         boom: options.boom,
         ..RobotSimConfig::default()
     };
     let mut sim = RobotSim::new(&setup.model, config).map_err(|e| sim_error(&e))?;
-    sim.set_state_single_stance(&state.q, &state.dq, setup.gait.stance_leg)
-        .map_err(|e| sim_error(&e))?;
+    match options.start {
+        SimStart::Walk => sim.set_state_single_stance(&state.q, &state.dq, setup.gait.stance_leg),
+        SimStart::Stand => sim.set_state(&state.q, &vec![0.0; state.q.len()]),
+    }
+    .map_err(|e| sim_error(&e))?;
     sim.attach_imu(options.imu_noise, options.seed);
     let mut motors = Vec::with_capacity(setup.config.leg_motors.len());
     for (k, m) in setup.config.leg_motors.iter().enumerate() {
@@ -224,6 +225,9 @@ fn sim_error(e: &drivers::sim::robot::RobotSimError) -> RuntimeError {
     }
 }
 
+/// How often a run records the treadmill's ground truth ([`SimWalkReport::trace`]), s.
+pub const TRUTH_PERIOD_S: f64 = 0.01;
+
 /// Walk the gait on the simulated treadmill for `options.duration_s` (simulated time, as fast
 /// as the CPU allows) and measure the walk from the simulator's ground truth.
 pub fn walk(setup: &Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
@@ -237,7 +241,7 @@ pub fn walk_with_operator(
     operator: Option<crate::operator::OperatorReceiver>,
 ) -> Result<SimWalkReport> {
     let bus = sim_backend(setup, options)?;
-    let belt_speed_mps = bus.plant().config().belt_speed_mps;
+    let belt_speed_mps = bus.plant().belt_speed_mps();
     let x0_m = bus.plant().base_position_m()[0];
     let stance_x0_m = bus.plant().foot_position_m(setup.gait.stance_leg)[0];
     let period_s = 1.0 / setup.config.loop_.rate_hz;
@@ -258,90 +262,60 @@ pub fn walk_with_operator(
         });
     }
     let clock = FaultClock::new(&schedule);
-    let script = if setup.library.is_empty() {
+    let belt_points = options
+        .belt_profile
+        .as_ref()
+        .map_or(&[][..], |p| p.points.as_slice());
+    let belt_commands = if setup.library.is_empty() {
         Vec::new()
     } else {
-        belt_script(belt_speed_mps, &schedule)
+        belt_script(belt_speed_mps, &schedule, belt_points)
     };
-    let backend = FaultySim::new(setup, bus, profile, schedule)?;
+    let backend = FaultySim::new(setup, bus, profile, schedule)?
+        .with_belt_profile(belt_points)
+        .with_truth_trace(options.duration_s, TRUTH_PERIOD_S);
     let mut loop_options = LoopOptions::simulation(options.duration_s);
-    loop_options.start_walking = true;
+    loop_options.start_walking = options.start == SimStart::Walk;
+    if options.start == SimStart::Stand {
+        loop_options.script.push((0.0, OperatorCommand::Start));
+    }
+    loop_options.script.extend_from_slice(&options.script);
+    loop_options.script.extend(belt_commands);
+    loop_options.script.sort_by(|a, b| a.0.total_cmp(&b.0));
     loop_options.log_path = options.log_path.clone();
     loop_options.stop_after_trip_s = options.stop_after_trip_s;
-    loop_options.script = script;
 
     // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
     loop_options.realtime = options.real_time;
-    let (summary, backend) = if options.real_time {
+    let (summary, mut backend) = if options.real_time {
         crate::run(setup, backend, MonotonicClock, loop_options, operator)?
     } else {
         crate::run(setup, backend, clock, loop_options, operator)?
     };
+    let trace = std::mem::take(&mut backend.trace);
     let faults_started = backend.started;
     let wire = backend.bus.wire_stats();
-    let backend = backend.bus;
-    let sim = backend.plant();
-    let mut report = SimWalkReport {
-        duration_s: options.duration_s,
+    Ok(SimWalkReport::measure(
+        summary,
+        backend.bus.plant(),
+        options.duration_s,
         belt_speed_mps,
-        steps: 0,
-        repeated_touchdowns: 0,
-        mean_step_length_m: f64::NAN,
-        mean_step_duration_s: f64::NAN,
-        speed_mps: f64::NAN,
-        drift_m: sim.base_position_m()[0] - x0_m,
-        landing_drift_m: 0.0,
-        walked_s: sim.time_s(),
-        fall: None,
-        sim_fault_s: None,
-        friction_exceeded: 0,
-        distance_m: 0.0,
+        setup.gait.stance_leg,
+        x0_m,
+        stance_x0_m,
         faults_started,
         wire,
-        summary,
-    };
-    // The initial state is just after a touchdown of the gait's stance foot.
-    let mut last_side = setup.gait.stance_leg;
-    let mut last_t_s = 0.0;
-    let (mut length_sum_m, mut duration_sum_s) = (0.0, 0.0);
-    for event in sim.events() {
-        match *event {
-            SimEvent::Touchdown(td) if report.fall.is_none() => {
-                if td.side == last_side {
-                    report.repeated_touchdowns += 1;
-                    continue;
-                }
-                report.steps += 1;
-                report.landing_drift_m = td.foot_x_m - stance_x0_m;
-                length_sum_m += td.step_length_m;
-                duration_sum_s += td.t_s - last_t_s;
-                last_side = td.side;
-                last_t_s = td.t_s;
-            }
-            SimEvent::Fall { t_s, what } if report.fall.is_none() => {
-                report.fall = Some((t_s, what));
-                report.walked_s = t_s;
-            }
-            SimEvent::Fault { t_s } => report.sim_fault_s = Some(t_s),
-            SimEvent::FrictionExceeded { .. } => report.friction_exceeded += 1,
-            _ => {}
-        }
-    }
-    report.distance_m = length_sum_m;
-    if report.steps > 0 {
-        let n = report.steps as f64;
-        report.mean_step_length_m = length_sum_m / n;
-        report.mean_step_duration_s = duration_sum_s / n;
-        report.speed_mps = length_sum_m / duration_sum_s;
-    }
-    Ok(report)
+        trace,
+    ))
 }
 
-/// The belt's speed as an operator tells it to speed control: at the start, and at the start
-/// and end of every belt step of the fault schedule (operator commands, so the log replays).
+/// The belt's speed as an operator tells it to speed control: at the start, at every pair of
+/// the belt profile (`--belt t:v,…`: the speed the belt ramps to), and at the start and end of
+/// every belt step of the fault schedule (operator commands, so the log replays).
 fn belt_script(
     belt_speed_mps: f64,
     schedule: &[crate::sim::faults::ScheduledFault],
+    belt_points: &[(f64, f64)],
 ) -> Vec<(f64, crate::control::OperatorCommand)> {
     use crate::control::OperatorCommand;
     let mut script = vec![(
@@ -350,6 +324,9 @@ fn belt_script(
             speed_mps: belt_speed_mps,
         },
     )];
+    for &(t_s, speed_mps) in belt_points {
+        script.push((t_s, OperatorCommand::Belt { speed_mps }));
+    }
     for f in schedule {
         if let Fault::BeltSpeed { speed_mps } = f.fault {
             script.push((f.start_s, OperatorCommand::Belt { speed_mps }));
@@ -526,6 +503,9 @@ pub fn soak(
         walk_options.seed = options.seed.wrapping_add(episode);
         walk_options.faults = Some(options.profile.clone());
         walk_options.stop_after_trip_s = Some(SOAK_LINGER_S);
+        // The soak's subject is the faults: an endless belt (the belt's ends are the
+        // treadmill bench's, `adam bench treadmill`).
+        walk_options.belt_length_m = f64::INFINITY;
         walk_options.log_path = Some(match &options.log_dir {
             Some(dir) => dir.join(format!("episode-{episode:03}.mcap")),
             None => temp_log.clone(),
@@ -538,88 +518,6 @@ pub fn soak(
         let _ = std::fs::remove_file(&temp_log);
     }
     Ok(report)
-}
-
-fn granted(r: Option<core::result::Result<(), i32>>) -> String {
-    match r {
-        None => "not asked".into(),
-        Some(Ok(())) => "ok".into(),
-        Some(Err(errno)) => format!("denied (errno {errno})"),
-    }
-}
-
-impl std::fmt::Display for SimWalkReport {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let s = &self.summary;
-        writeln!(
-            f,
-            "walked {:.2} s of {:.2} s on the treadmill at {:.3} m/s; final state {}",
-            self.walked_s,
-            self.duration_s,
-            self.belt_speed_mps,
-            s.final_state.name()
-        )?;
-        writeln!(
-            f,
-            "steps {} | mean step length {:.4} m | mean step duration {:.4} s | speed {:.4} m/s | drift {:+.3} m",
-            self.steps,
-            self.mean_step_length_m,
-            self.mean_step_duration_s,
-            self.speed_mps,
-            self.drift_m
-        )?;
-        let t = &s.tracking;
-        writeln!(f, "{t}")?;
-        let trip = s.trip.map_or_else(|| "none".to_string(), |t| t.to_string());
-        let fall = self
-            .fall
-            .map_or_else(|| "none".to_string(), |(t, w)| format!("{w} at {t:.3} s"));
-        if let Some(rms) = t.pitch_rms_rad() {
-            writeln!(
-                f,
-                "pitch estimate vs ground truth: RMS {:.3}°, max {:.3}° (bias estimate {:+.4} rad/s)",
-                rms.to_degrees(),
-                t.pitch_max_abs_rad.to_degrees(),
-                s.last_sample.gyro_bias_rad_s
-            )?;
-        }
-        if self.faults_started > 0 || self.wire != WireStats::default() {
-            let w = &self.wire;
-            writeln!(
-                f,
-                "faults injected {} | CAN frames lost {}, corrupted {}, replies delayed {} ({} past the period)",
-                self.faults_started, w.lost, w.corrupted, w.delayed, w.delayed_late
-            )?;
-        }
-        writeln!(
-            f,
-            "safety trips: {trip} | falls: {fall} | repeated touchdowns {} | friction warnings {}",
-            self.repeated_touchdowns, self.friction_exceeded
-        )?;
-        write!(
-            f,
-            "tick compute time: median {:.1} µs, p99 {:.1} µs, max {:.1} µs | missing replies {} | bus errors {}",
-            s.tick_times.median_ns as f64 / 1e3,
-            s.tick_times.p99_ns as f64 / 1e3,
-            s.tick_times.max_ns as f64 / 1e3,
-            s.missing_replies,
-            s.bus_errors
-        )?;
-        if s.wake_latency.max_ns > 0 {
-            write!(
-                f,
-                "\nloop wake-up latency (jitter): median {:.1} µs, p99 {:.1} µs, max {:.1} µs | overruns {} (longest streak {}) | mlockall {} SCHED_FIFO {}",
-                s.wake_latency.median_ns as f64 / 1e3,
-                s.wake_latency.p99_ns as f64 / 1e3,
-                s.wake_latency.max_ns as f64 / 1e3,
-                s.overruns,
-                s.max_overrun_streak,
-                granted(s.realtime.memory_locked),
-                granted(s.realtime.fifo),
-            )?;
-        }
-        Ok(())
-    }
 }
 
 /// The leg motors of `setup` on four free joints (inertia 0.05 kg·m², damping 0.1 N·m·s/rad, no

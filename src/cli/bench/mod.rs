@@ -1,8 +1,12 @@
 //! `adam bench plan`, `adam bench check` and `adam bench library`: the plan, the gait check and
-//! the gait library repeated, a row per run and the medians.
+//! the gait library repeated, a row per run and the medians; `adam bench treadmill`
+//! ([`mod@treadmill`]): the treadmill scenarios of issue #29 over seeds, a table per scenario.
 
 mod library;
 mod report;
+mod treadmill;
+
+pub(crate) use treadmill::treadmill;
 
 pub(crate) use library::library;
 
@@ -44,6 +48,23 @@ pub(crate) enum BenchWhat {
         runs: usize,
         /// The gait file.
         #[arg(default_value = "configs/gaits/adam_walk.json")]
+        gait: PathBuf,
+    },
+    /// The treadmill scenarios on the simulated robot, in parallel, a table each: belts at
+    /// 0.15–0.35 m/s for 60 s, a belt step 0.20 → 0.30 → 0.20 m/s, pushes at five points of the
+    /// step (and the largest ridden through each way), start and restart.
+    Treadmill {
+        /// Seeds, e.g. `1,2,3` (default 1–5; with --quick 1,2).
+        #[arg(long, value_delimiter = ',')]
+        seeds: Option<Vec<u64>>,
+        /// A shorter set: 20 s belts, a 30 s belt step, three push points, 3 bisections.
+        #[arg(long)]
+        quick: bool,
+        /// Runtime config (TOML).
+        #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
+        config: PathBuf,
+        /// Gait file (JSON); default: the co-designed ADAM's.
+        #[arg(long, default_value = runtime::DEFAULT_GAIT)]
         gait: PathBuf,
     },
 }

@@ -24,10 +24,28 @@ pub(crate) struct RunArgs {
     /// Run time, e.g. `30s`, `1500ms` or `30` (seconds); more than 0, at most 24 h.
     #[arg(long, default_value = "30s", value_parser = parse_duration_s)]
     duration: f64,
-    /// Treadmill belt speed, m/s, inside the config's `[treadmill] belt_speed_range_mps`
-    /// (sim; default: the gait's speed).
+    /// Treadmill belt speed, m/s (e.g. `0.25`), or a profile of `time:speed` pairs (s, m/s;
+    /// e.g. `0:0.20,20:0.30,40:0.25`: from each time the belt ramps to the speed at
+    /// --belt-acceleration; without a pair at 0 it starts at rest); every speed inside the
+    /// config's `[treadmill] belt_speed_range_mps` (sim; default: the gait's speed).
     #[arg(long, allow_negative_numbers = true)]
-    belt: Option<f64>,
+    belt: Option<String>,
+    /// The belt's ramp acceleration, m/s² (sim; default 0.5).
+    #[arg(long)]
+    belt_acceleration: Option<f64>,
+    /// A push on the torso, `time:force:duration` (s, N with + forward, s), e.g.
+    /// `10.5:-20:0.2`; `time:force:duration:phase` lands it at that phase (0–1) of the first
+    /// step after the time. Repeatable (sim).
+    #[arg(long, allow_negative_numbers = true)]
+    push: Vec<String>,
+    /// How the simulated run starts: `walk` (in the gait's post-impact state) or `stand`
+    /// (standing; Start at 0 s ramps to Stand in 2 s; script a `walk`) (sim; default walk).
+    #[arg(long, value_enum)]
+    start: Option<Start>,
+    /// Operator commands scripted in time, `time:command` pairs (s; start, walk, stop, damp,
+    /// reset, estop), e.g. `3:stop,10:walk` (sim).
+    #[arg(long)]
+    script: Option<String>,
     /// MCAP log file (sim; default: no log); an existing file needs --force.
     #[arg(long)]
     log: Option<PathBuf>,
@@ -77,6 +95,24 @@ pub(crate) struct SoakArgs {
     /// Runtime config (TOML).
     #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
     config: PathBuf,
+}
+
+/// Arguments of `adam demo`.
+#[derive(clap::Args)]
+pub(crate) struct DemoArgs {
+    /// Treadmill belt speed, m/s, inside the config's `[treadmill] belt_speed_range_mps`
+    /// (default: the gait's speed).
+    #[arg(long, allow_negative_numbers = true)]
+    belt_speed: Option<f64>,
+}
+
+/// How a simulated run starts.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Start {
+    /// Walking, in the gait's planned post-impact state.
+    Walk,
+    /// Standing in the gait's first pose.
+    Stand,
 }
 
 /// The longest run or soak accepted, s (a day).
@@ -141,6 +177,10 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             .collect(),
         Backend::Can => [
             given("--belt", args.belt.is_some()),
+            given("--belt-acceleration", args.belt_acceleration.is_some()),
+            given("--push", !args.push.is_empty()),
+            given("--start", args.start.is_some()),
+            given("--script", args.script.is_some()),
             given("--log", args.log.is_some()),
             given("--force", args.force),
             given("--seed", args.seed.is_some()),
@@ -159,7 +199,7 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
 fn check_belt_speeds(
     setup: &runtime::Setup,
     gait: &std::path::Path,
-    belt: Option<f64>,
+    belt: Option<&Belt>,
     faults: Option<(&str, &runtime::sim::faults::FaultProfile)>,
 ) -> Result<()> {
     use runtime::sim::faults::Fault;
@@ -172,8 +212,10 @@ fn check_belt_speeds(
         ),
         setup.gait.speed_mps,
     )?;
-    if let Some(v) = belt {
-        treadmill.check_belt_speed("--belt", v)?;
+    match belt {
+        Some(Belt::Constant(v)) => treadmill.check_belt_speed("--belt", *v)?,
+        Some(Belt::Profile(p)) => p.check_range(treadmill, "--belt")?,
+        None => {}
     }
     if let Some((name, profile)) = faults {
         let events = profile.events.iter().map(|e| e.fault);
@@ -192,6 +234,31 @@ fn check_belt_speeds(
         }
     }
     Ok(())
+}
+
+/// What `--belt` asks for.
+enum Belt {
+    /// One speed, m/s.
+    Constant(f64),
+    /// Speeds in time.
+    Profile(runtime::sim::treadmill::BeltProfile),
+}
+
+impl Belt {
+    /// A number is a constant speed; `time:speed` pairs are a profile.
+    fn parse(text: &str) -> Result<Self> {
+        if text.contains(':') {
+            return Ok(Self::Profile(runtime::sim::treadmill::BeltProfile::parse(
+                text, "--belt",
+            )?));
+        }
+        let v: f64 = text.trim().parse().map_err(|_| {
+            anyhow::anyhow!(
+                "--belt `{text}` is neither a speed in m/s (e.g. 0.25) nor time:speed pairs (e.g. 0:0.20,20:0.30)"
+            )
+        })?;
+        Ok(Self::Constant(v))
+    }
 }
 
 /// A wall-clock simulated run that takes operator commands over iceoryx2 and, if asked, from
@@ -248,21 +315,26 @@ fn sim_walk(setup: &runtime::Setup, options: &runtime::sim::run::SimWalkOptions)
 }
 
 /// `adam demo`: the shipped gait, 30 s on the simulated treadmill, logged under `logs/`.
-pub(crate) fn demo() -> Result<()> {
+pub(crate) fn demo(args: &DemoArgs) -> Result<()> {
     let gait = shipped::input(std::path::Path::new(runtime::DEFAULT_GAIT));
     let config = shipped::input(std::path::Path::new(shipped::RUNTIME_CONFIG));
     let setup = runtime::Setup::load(&config, &gait)?;
     check_belt_speeds(&setup, &gait, None, None)?;
+    if let Some(v) = args.belt_speed {
+        setup.config.treadmill.check_belt_speed("--belt-speed", v)?;
+    }
     let g = &setup.gait;
     println!(
-        "adam demo: {} (step {:.4} m, {:.4} s, {:.4} m/s) with {}, 30 s on the simulated treadmill via SimBus (A1 CAN codec)",
+        "adam demo: {} (step {:.4} m, {:.4} s, {:.4} m/s) with {}, 30 s on the simulated treadmill (belt {:.3} m/s, 1.6 m long) via SimBus (A1 CAN codec)",
         gait.display(),
         g.step_length_m,
         g.step_duration_s,
         g.speed_mps,
-        config.display()
+        config.display(),
+        args.belt_speed.unwrap_or(g.speed_mps),
     );
     let mut options = runtime::sim::run::SimWalkOptions::new(30.0);
+    options.belt_speed_mps = args.belt_speed;
     options.log_path = Some(timestamped_log_path());
     sim_walk(&setup, &options)
 }
@@ -288,6 +360,10 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         config,
         duration,
         belt,
+        belt_acceleration,
+        push,
+        start,
+        script,
         log,
         force,
         seed,
@@ -300,24 +376,56 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
     let setup = runtime::Setup::load(&config, &gait)?;
     match backend {
         Backend::Sim => {
-            let faults = faults
+            let mut faults = faults
                 .as_deref()
                 .map(|f| {
                     runtime::sim::faults::FaultProfile::resolve(&shipped::fault_profile(f))
                         .map(|p| (f, p))
                 })
                 .transpose()?;
+            let belt = belt.as_deref().map(Belt::parse).transpose()?;
             check_belt_speeds(
                 &setup,
                 &gait,
-                belt,
+                belt.as_ref(),
                 faults.as_ref().map(|(name, p)| (*name, p)),
             )?;
+            if let Some(a) = belt_acceleration {
+                if !(a.is_finite() && a > 0.0) {
+                    bail!("--belt-acceleration {a} m/s²: must be positive and finite");
+                }
+            }
+            let pushes = push
+                .iter()
+                .map(|p| runtime::sim::treadmill::parse_push(p, "--push"))
+                .collect::<runtime::Result<Vec<_>>>()?;
+            if !pushes.is_empty() {
+                let (_, profile) = faults
+                    .get_or_insert_with(|| ("none", runtime::sim::faults::FaultProfile::none()));
+                profile.events.extend(pushes);
+            }
+            let script = script
+                .as_deref()
+                .map(|s| runtime::sim::treadmill::parse_script(s, "--script"))
+                .transpose()?
+                .unwrap_or_default();
             if let Some(path) = &log {
                 writable(path, force)?;
             }
             let mut options = runtime::sim::run::SimWalkOptions::new(duration);
-            options.belt_speed_mps = belt;
+            match belt {
+                Some(Belt::Constant(v)) => options.belt_speed_mps = Some(v),
+                Some(Belt::Profile(p)) => options.belt_profile = Some(p),
+                None => {}
+            }
+            if let Some(a) = belt_acceleration {
+                options.belt_acceleration_mps2 = a;
+            }
+            options.start = match start {
+                Some(Start::Stand) => runtime::sim::run::SimStart::Stand,
+                Some(Start::Walk) | None => runtime::sim::run::SimStart::Walk,
+            };
+            options.script = script;
             options.log_path = log;
             options.seed = seed.unwrap_or(1);
             options.real_time = real_time;

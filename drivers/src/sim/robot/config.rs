@@ -20,8 +20,16 @@ pub struct Boom {
 pub struct RobotSimConfig {
     /// Integration rate \[Hz\]; `JointPlant::step(dt)` takes `round(dt · rate)` equal steps.
     pub rate_hz: f64,
-    /// Treadmill belt speed, positive when the belt surface moves backwards \[m/s\].
+    /// Treadmill belt speed at the start, positive when the belt surface moves backwards
+    /// \[m/s\] (later changes: [`RobotSim::set_belt_target_speed`](super::RobotSim::set_belt_target_speed),
+    /// [`RobotSim::set_belt_speed`](super::RobotSim::set_belt_speed)).
     pub belt_speed_mps: f64,
+    /// Length of the belt \[m\]: the robot starts at its centre and a stance foot beyond either
+    /// end is a fall ([`FallCause::OffBelt`](super::FallCause::OffBelt)); `f64::INFINITY`: an
+    /// endless belt.
+    pub belt_length_m: f64,
+    /// Acceleration of the belt's ramps toward a new target speed \[m/s²\].
+    pub belt_acceleration_mps2: f64,
     /// The boom's added mass, or `None` (default: the paper did not model it).
     pub boom: Option<Boom>,
     /// Friction coefficient μ for the friction report.
@@ -38,11 +46,19 @@ pub struct RobotSimConfig {
     pub dynamics_refresh_substeps: u32,
 }
 
+/// The belt's length by default \[m\].
+pub const DEFAULT_BELT_LENGTH_M: f64 = 1.6;
+
+/// The belt's ramp acceleration by default \[m/s²\].
+pub const DEFAULT_BELT_ACCELERATION_MPS2: f64 = 0.5;
+
 impl Default for RobotSimConfig {
     fn default() -> Self {
         Self {
             rate_hz: 10_000.0,
             belt_speed_mps: 0.0,
+            belt_length_m: DEFAULT_BELT_LENGTH_M,
+            belt_acceleration_mps2: DEFAULT_BELT_ACCELERATION_MPS2,
             boom: None,
             friction_coefficient: 1.0,
             fall_pitch_limit_rad: 1.0,
@@ -66,6 +82,20 @@ pub(super) fn validate(c: &RobotSimConfig) -> Result<()> {
     }
     if !c.belt_speed_mps.is_finite() {
         return bad("belt_speed_mps", c.belt_speed_mps, "must be finite");
+    }
+    if c.belt_length_m.is_nan() || c.belt_length_m <= 0.0 {
+        return bad(
+            "belt_length_m",
+            c.belt_length_m,
+            "must be positive (infinite: an endless belt)",
+        );
+    }
+    if !(c.belt_acceleration_mps2.is_finite() && c.belt_acceleration_mps2 > 0.0) {
+        return bad(
+            "belt_acceleration_mps2",
+            c.belt_acceleration_mps2,
+            "must be positive and finite",
+        );
     }
     if c.friction_coefficient.is_nan() || c.friction_coefficient < 0.0 {
         return bad(

@@ -13,11 +13,18 @@
 //!   joint's diagonal of `D` (so the plastic impacts see it too) and the viscous friction b q̇ in
 //!   `H`, exactly as the planner and the Poincaré check see them. A URDF without them simulates
 //!   the rigid-body robot.
-//! * **Treadmill.** The belt moves at a constant `belt_speed_mps` backwards. A constant-velocity
-//!   frame is inertial, so the simulation runs in the *belt frame*, where the ground is static and
-//!   a stance foot is pinned; world positions and velocities are reported by adding the belt
-//!   travel (`x_world = x_belt − v_belt t`). The robot walks "in place" when it walks forward at
-//!   the belt speed.
+//! * **Treadmill.** The belt is a moving ground of a given length (`belt_length_m`, default
+//!   1.6 m) under the robot, which starts at its centre; its surface moves backwards at the belt
+//!   speed, stepped ([`RobotSim::set_belt_speed`]) or ramped toward a target at a set
+//!   acceleration ([`RobotSim::set_belt_target_speed`], `belt_acceleration_mps2`, default
+//!   0.5 m/s²). A stance foot is pinned to the belt, so it acts on the robot through the contact
+//!   (friction with a moving surface: the contact's tangential velocity is relative to the
+//!   belt). The equations are integrated in the frame of the belt's surface, where a stance foot
+//!   is still; while the belt ramps that frame accelerates and every body feels the inertial
+//!   force `m·a_belt`, applied exactly (the x column of `D`; `robot/belt.rs`). Everything
+//!   reported is in the world: positions add the belt's travel, velocities subtract its speed,
+//!   [`RobotSim::position_on_belt_m`] is the hip's distance forward of the belt's centre, and a
+//!   stance foot beyond either end is a fall ([`FallCause::OffBelt`]).
 //! * **Boom** (optional, off by default: the paper did not model it): extra mass and pitch
 //!   inertia rigidly added to the torso ([`Boom`]). The boom's constraint to the sagittal plane is
 //!   implicit (the model is planar).
@@ -110,16 +117,23 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod belt;
 mod config;
+mod events;
 mod solver;
 mod step;
 
-pub use config::{standing_pose, Boom, RobotSimConfig};
+pub use belt::BeltEnd;
+pub use config::{
+    standing_pose, Boom, RobotSimConfig, DEFAULT_BELT_ACCELERATION_MPS2, DEFAULT_BELT_LENGTH_M,
+};
+pub use events::{FallCause, FallRecord, SimEvent, Touchdown};
 
 use crate::bus::MotorSpec;
 use crate::imu::{Imu, ImuError, ImuFault, ImuNoise, ImuSample, NoisyImu};
 use crate::sim::firmware::SimMotor;
 use crate::sim::plant::JointPlant;
+use belt::Belt;
 use config::validate;
 use model::kinematics::BodyStates;
 use model::robot::{BodyInertia, Legs};
@@ -202,83 +216,6 @@ pub enum Contact {
     },
 }
 
-/// What touched the ground (or tipped over) in a fall.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FallCause {
-    /// The torso (its hip axis or its top) reached the ground.
-    Torso,
-    /// A knee joint reached the ground.
-    Knee(Side),
-    /// The torso pitched beyond the limit.
-    Pitch,
-}
-
-/// What fell, for a user, e.g. `left knee on the ground`.
-impl core::fmt::Display for FallCause {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            FallCause::Torso => f.write_str("torso on the ground"),
-            FallCause::Knee(Side::Left) => f.write_str("left knee on the ground"),
-            FallCause::Knee(Side::Right) => f.write_str("right knee on the ground"),
-            FallCause::Pitch => f.write_str("torso pitched past its limit"),
-        }
-    }
-}
-
-/// A foot touchdown: the plastic impact and the step it ended.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Touchdown {
-    /// Time of contact \[s\].
-    pub t_s: f64,
-    /// Foot that touched down.
-    pub side: Side,
-    /// Its world x position \[m\].
-    pub foot_x_m: f64,
-    /// Step length: this foot's x minus the other foot's x at touchdown \[m\].
-    pub step_length_m: f64,
-    /// Impulse on the robot at this foot, world (x, z) \[N·s\].
-    pub impulse_ns: [f64; 2],
-    /// Kinetic energy just before the impact \[J\].
-    pub kinetic_energy_before_j: f64,
-    /// Kinetic energy just after the impact \[J\].
-    pub kinetic_energy_after_j: f64,
-}
-
-/// Something that happened in the simulation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SimEvent {
-    /// A foot touched down.
-    Touchdown(Touchdown),
-    /// A stance foot left the ground (its normal force or impulse would have pulled).
-    Liftoff {
-        /// Time \[s\].
-        t_s: f64,
-        /// Which foot.
-        side: Side,
-    },
-    /// The tangential force of a stance foot exceeds μ × its normal force (foot kept pinned).
-    FrictionExceeded {
-        /// Time \[s\].
-        t_s: f64,
-        /// Which foot.
-        side: Side,
-        /// |F_x| / F_z.
-        ratio: f64,
-    },
-    /// The robot fell (reported once).
-    Fall {
-        /// Time \[s\].
-        t_s: f64,
-        /// What touched the ground or tipped.
-        what: FallCause,
-    },
-    /// A step failed; the simulation is frozen (see [`RobotSim::step`]).
-    Fault {
-        /// Time \[s\].
-        t_s: f64,
-    },
-}
-
 /// Which joint of a leg.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LegJoint {
@@ -327,18 +264,19 @@ pub struct RobotSim {
     t_s: f64,
     base_accel_mps2: [f64; 2],
     events: Vec<SimEvent>,
-    fallen: Option<FallCause>,
+    fallen: Option<FallRecord>,
     max_penetration_m: f64,
     imu: Option<NoisyImu>,
-    /// (time, base velocity) at the previous IMU read: the IMU reports the mean acceleration
-    /// since then.
-    imu_last: Option<(f64, [f64; 2])>,
+    /// (time, base velocity in the belt frame, belt speed) at the previous IMU read: the IMU
+    /// reports the mean world acceleration since then.
+    imu_last: Option<(f64, [f64; 2], f64)>,
     fault_t_s: Option<f64>,
     /// External force at the hip axis (world x, z) \[N\] and the time it ends \[s\].
     push: ([f64; 2], f64),
-    /// Belt travel up to `belt_since_t_s` \[m\] (world x of the belt frame's origin then).
-    belt_offset0_m: f64,
-    belt_since_t_s: f64,
+    /// The treadmill's belt.
+    belt: Belt,
+    /// The belt's acceleration over the present integration step \[m/s²\].
+    belt_accel_mps2: f64,
     imu_fault: ImuFault,
     imu_held: ImuSample,
 }
@@ -405,8 +343,12 @@ impl RobotSim {
             imu_last: None,
             fault_t_s: None,
             push: ([0.0; 2], 0.0),
-            belt_offset0_m: 0.0,
-            belt_since_t_s: 0.0,
+            belt: Belt::new(
+                config.belt_speed_mps,
+                config.belt_acceleration_mps2,
+                config.belt_length_m,
+            ),
+            belt_accel_mps2: 0.0,
             imu_fault: ImuFault::None,
             imu_held: ImuSample::default(),
             model,
@@ -420,7 +362,8 @@ impl RobotSim {
     /// Put the robot at (q, q̇) (belt frame). Feet within [`PENETRATION_TOLERANCE_M`] of the
     /// ground become stance feet (pinned where they are, on `z = 0`); the state is then
     /// projected onto their constraints. Design coordinates keep the values given, with zero
-    /// velocity. Clears the fall flag and the penetration record, keeps time and events.
+    /// velocity. The belt's centre is placed under the hip. Clears the fall flag and the
+    /// penetration record, keeps time and events.
     pub fn set_state(&mut self, q: &[f64], dq: &[f64]) -> Result<()> {
         self.set_state_with_stance(q, dq, None)
     }
@@ -471,6 +414,7 @@ impl RobotSim {
         }
         self.factor_present()?;
         self.project(None, true)?;
+        self.belt.centre_x_m = self.base_position_m()[0];
         self.fallen = None;
         self.max_penetration_m = 0.0;
         self.fault_t_s = None;
@@ -497,31 +441,26 @@ impl RobotSim {
         Ok(())
     }
 
-    /// Step the belt to `speed_mps` now. The belt frame changes speed with it: every velocity
-    /// relative to the belt grows by the step, then the stance feet, pinned to the belt, are
-    /// brought to its speed by the contact impulse (the plastic projection). A robot in the air
-    /// keeps its world velocity.
+    /// Step the belt to `speed_mps` now (its target too). The belt frame changes speed with it:
+    /// every velocity relative to the belt grows by the step, then the stance feet, pinned to
+    /// the belt, are brought to its speed by the contact impulse (the plastic projection). A
+    /// robot in the air keeps its world velocity.
     pub fn set_belt_speed(&mut self, speed_mps: f64) -> Result<()> {
-        if !speed_mps.is_finite() {
-            return Err(RobotSimError::Config {
-                field: "belt_speed_mps",
-                value: speed_mps,
-                reason: "must be finite",
-            });
-        }
-        let step = speed_mps - self.config.belt_speed_mps;
-        self.belt_offset0_m = self.belt_offset_m();
-        self.belt_since_t_s = self.t_s;
-        self.config.belt_speed_mps = speed_mps;
+        check_belt_speed(speed_mps)?;
+        let step = speed_mps - self.belt.speed_mps;
+        self.belt.step_to(self.t_s, speed_mps);
         self.dq[0] += step;
         self.refresh_due = true;
-        // The IMU differentiates the belt-frame velocity: shift its reference too, so it sees
-        // only the world acceleration (the impulse), not the change of frame.
-        if let Some((_, v)) = self.imu_last.as_mut() {
-            v[0] += step;
-        }
         self.factor_present()?;
         self.project(None, true).map(|_| ())
+    }
+
+    /// Ramp the belt from its present speed to `speed_mps` at the config's
+    /// `belt_acceleration_mps2` (replacing any ramp under way); the stance feet go with it.
+    pub fn set_belt_target_speed(&mut self, speed_mps: f64) -> Result<()> {
+        check_belt_speed(speed_mps)?;
+        self.belt.target_mps = speed_mps;
+        Ok(())
     }
 
     /// Fault of the IMU output from the next read on ([`ImuFault::None`] heals it).
@@ -560,6 +499,7 @@ impl RobotSim {
         let substeps = (dt_s * self.config.rate_hz).round().max(1.0) as usize;
         let h = dt_s / substeps as f64;
         let v0 = [self.dq[0], self.dq[1]];
+        let belt0_mps = self.belt.speed_mps;
         for _ in 0..substeps {
             if let Err(e) = self.advance(h) {
                 self.fault_t_s = Some(self.t_s);
@@ -567,13 +507,18 @@ impl RobotSim {
                 return Err(e);
             }
         }
-        self.base_accel_mps2 = [(self.dq[0] - v0[0]) / dt_s, (self.dq[1] - v0[1]) / dt_s];
+        // World acceleration: the belt frame's own change of speed taken out.
+        let belt_dv = self.belt.speed_mps - belt0_mps;
+        self.base_accel_mps2 = [
+            (self.dq[0] - v0[0] - belt_dv) / dt_s,
+            (self.dq[1] - v0[1]) / dt_s,
+        ];
         Ok(())
     }
 
-    /// World displacement of the belt frame: `−v_belt · t` (piecewise, over belt steps) \[m\].
+    /// World displacement of the belt frame: `−∫ v_belt dt` \[m\].
     fn belt_offset_m(&self) -> f64 {
-        self.belt_offset0_m - self.config.belt_speed_mps * (self.t_s - self.belt_since_t_s)
+        self.belt.offset_m(self.t_s)
     }
 
     /// Joint torques that hold the present pose still on the present stance feet (gravity
@@ -655,7 +600,27 @@ impl RobotSim {
 
     /// Base velocity in the world (x, z) \[m/s\].
     pub fn base_velocity_mps(&self) -> [f64; 2] {
-        [self.dq[0] - self.config.belt_speed_mps, self.dq[1]]
+        [self.dq[0] - self.belt.speed_mps, self.dq[1]]
+    }
+
+    /// The hip's position on the belt: its world x forward of the belt's centre \[m\].
+    pub fn position_on_belt_m(&self) -> f64 {
+        self.base_position_m()[0] - self.belt.centre_x_m
+    }
+
+    /// The belt's present speed, its surface moving backwards \[m/s\].
+    pub fn belt_speed_mps(&self) -> f64 {
+        self.belt.speed_mps
+    }
+
+    /// The speed the belt is ramping toward (its present speed when not ramping) \[m/s\].
+    pub fn belt_target_speed_mps(&self) -> f64 {
+        self.belt.target_mps
+    }
+
+    /// The belt's length \[m\] (infinite: endless).
+    pub fn belt_length_m(&self) -> f64 {
+        self.belt.length_m
     }
 
     /// Base velocity relative to the belt (x, z) \[m/s\]: the walking speed.
@@ -712,6 +677,11 @@ impl RobotSim {
 
     /// The fall, if the robot has fallen.
     pub fn fallen(&self) -> Option<FallCause> {
+        self.fallen.map(|f| f.what)
+    }
+
+    /// The fall with where and when it happened, if the robot has fallen.
+    pub fn fall_record(&self) -> Option<FallRecord> {
         self.fallen
     }
 
@@ -766,6 +736,18 @@ impl RobotSim {
     }
 }
 
+fn check_belt_speed(speed_mps: f64) -> Result<()> {
+    if speed_mps.is_finite() {
+        Ok(())
+    } else {
+        Err(RobotSimError::Config {
+            field: "belt_speed_mps",
+            value: speed_mps,
+            reason: "must be finite",
+        })
+    }
+}
+
 impl JointPlant for RobotSim {
     fn joint_count(&self) -> usize {
         self.actuated_coordinates.len()
@@ -790,17 +772,20 @@ impl Imu for RobotSim {
     fn read(&mut self, out: &mut ImuSample) -> Result<(), ImuError> {
         let mut truth = self.imu_truth();
         let v = [self.dq[0], self.dq[1]];
-        if let Some((t0, v0)) = self.imu_last {
+        let belt_mps = self.belt.speed_mps;
+        if let Some((t0, v0, belt0_mps)) = self.imu_last {
             let dt = self.t_s - t0;
             if dt > 0.0 {
                 let g = self.model.gravity_mps2;
-                let f = [(v[0] - v0[0]) / dt, (v[1] - v0[1]) / dt + g];
+                // World acceleration: the belt frame's change of speed taken out.
+                let dvx = v[0] - v0[0] - (belt_mps - belt0_mps);
+                let f = [dvx / dt, (v[1] - v0[1]) / dt + g];
                 let (s, c) = self.q[2].sin_cos();
                 truth.accel_x_mps2 = c * f[0] - s * f[1];
                 truth.accel_z_mps2 = s * f[0] + c * f[1];
             }
         }
-        self.imu_last = Some((self.t_s, v));
+        self.imu_last = Some((self.t_s, v, belt_mps));
         let imu = self.imu.as_mut().ok_or(ImuError::NotAttached)?;
         let mut fresh = ImuSample::default();
         imu.measure(&truth, &mut fresh);
@@ -809,20 +794,5 @@ impl Imu for RobotSim {
             self.imu_held = fresh;
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_fall_reads_as_words() {
-        assert_eq!(FallCause::Torso.to_string(), "torso on the ground");
-        assert_eq!(
-            FallCause::Knee(Side::Right).to_string(),
-            "right knee on the ground"
-        );
-        assert_eq!(FallCause::Pitch.to_string(), "torso pitched past its limit");
     }
 }

@@ -3,7 +3,9 @@
 //! the multi-rate hold of the [robot docs](super), "Multi-rate dynamics".
 
 use super::solver::MAX_CONTACTS;
-use super::{Contact, FallCause, Result, RobotSim, RobotSimError, SimEvent, Touchdown, SIDES};
+use super::{
+    Contact, FallCause, FallRecord, Result, RobotSim, RobotSimError, SimEvent, Touchdown, SIDES,
+};
 use model::kinematics::BodyStates;
 
 /// A step keeps the frozen dynamics only while every stance foot carries at least this
@@ -28,16 +30,23 @@ fn candidate_masks(k: usize) -> &'static [u8] {
 
 impl RobotSim {
     pub(super) fn advance(&mut self, h: f64) -> Result<()> {
+        // The belt's acceleration over this step (0 unless it ramps), held over its parts.
+        self.belt_accel_mps2 = self.belt.acceleration_over(h);
         let mut remaining = h;
         for _ in 0..MAX_EVENTS_PER_STEP {
-            remaining -= self.sub_step(remaining, true)?;
+            let t0 = self.t_s;
+            let done = self.sub_step(remaining, true)?;
+            self.belt.advance(t0, done, self.belt_accel_mps2);
+            remaining -= done;
             if remaining <= h * 1e-9 {
                 break;
             }
         }
         if remaining > h * 1e-9 {
             // Too many events in one step (chatter): integrate the rest without event search.
-            self.sub_step(remaining, false)?;
+            let t0 = self.t_s;
+            let done = self.sub_step(remaining, false)?;
+            self.belt.advance(t0, done, self.belt_accel_mps2);
         }
         Ok(())
     }
@@ -87,6 +96,14 @@ impl RobotSim {
         }
         for (&c, &u) in self.actuated_coordinates.iter().zip(&self.torque_nm) {
             self.generalized_force[c] += u;
+        }
+        // The belt frame's inertial force while the belt ramps: m·a on every body, forward
+        // (the x column of D; belt module docs).
+        if self.belt_accel_mps2 != 0.0 {
+            let a = self.belt_accel_mps2;
+            for (c, f) in self.generalized_force.iter_mut().enumerate() {
+                *f += a * self.mass_matrix[(c, 0)];
+            }
         }
         // A push at the hip axis (the base origin): its Jacobian is the identity on (x, z).
         if self.t_s < self.push.1 {
@@ -373,6 +390,7 @@ impl RobotSim {
         let st = self.model.body_poses(&self.q)?;
         let other = self.model.frame_position_in(&st, self.feet[1 - i]);
         let x_world = p[0] + self.belt_offset_m();
+        let position_on_belt_m = self.position_on_belt_m();
         self.events.push(SimEvent::Touchdown(Touchdown {
             t_s: self.t_s,
             side: SIDES[i],
@@ -381,6 +399,8 @@ impl RobotSim {
             impulse_ns,
             kinetic_energy_before_j,
             kinetic_energy_after_j,
+            belt_speed_mps: self.belt.speed_mps,
+            position_on_belt_m,
         }));
         Ok(())
     }
@@ -460,10 +480,23 @@ impl RobotSim {
         } else if self.q[2].abs() > self.config.fall_pitch_limit_rad {
             Some(FallCause::Pitch)
         } else {
-            None
+            // A stance foot carried (or set down) past an end of the belt.
+            let offset = self.belt_offset_m();
+            self.contact.iter().find_map(|c| match *c {
+                Contact::Stance { anchor_xz_m } => self
+                    .belt
+                    .beyond(anchor_xz_m[0] + offset)
+                    .map(FallCause::OffBelt),
+                Contact::Air => None,
+            })
         };
         if let Some(what) = what {
-            self.fallen = Some(what);
+            self.fallen = Some(FallRecord {
+                t_s: self.t_s,
+                what,
+                base_x_m: self.base_position_m()[0],
+                position_on_belt_m: self.position_on_belt_m(),
+            });
             self.events.push(SimEvent::Fall {
                 t_s: self.t_s,
                 what,

@@ -1,0 +1,277 @@
+//! The treadmill scenarios of issue #29 (`adam bench treadmill`, `tests/treadmill.rs`): each a
+//! [`SimWalkOptions`] for a seed, and the figures its acceptance is judged by, measured from the
+//! simulator's ground truth ([`SimWalkReport`]) and never past a fall.
+//!
+//! | scenario | run | figures |
+//! |---|---|---|
+//! | [`constant_belt`] | belt at a speed for 60 s | falls, trips, max \|position on the belt\| after 10 s ([`max_abs_position_after_m`]), walking speed vs belt after 10 s ([`speed_ratio_after`]) |
+//! | [`belt_steps`] | belt 0.20 → 0.30 → 0.20 m/s (ramps of 0.5 m/s²) | steps to get within 0.05 m/s of the belt after each change ([`steps_to_match`]), max \|position\| |
+//! | [`push_at_phase`] | belt 0.25 m/s, a 0.2 s push landing at a phase of the step after 3 s | ride-through ([`rides_through`]: no trip, no stall, no fall) |
+//! | [`start_restart`] | from Stand; stop → Stand → Walk; belt started after the robot walks | trips, falls |
+//!
+//! Every run takes seconds of simulation; the bench runs them in parallel.
+
+use crate::control::{ControlState, OperatorCommand};
+use crate::sim::faults::{Fault, FaultEvent, FaultProfile};
+use crate::sim::report::{SimWalkReport, StepRecord};
+use crate::sim::run::{SimStart, SimWalkOptions};
+use crate::sim::treadmill::BeltProfile;
+
+/// Belt speeds of the constant-belt scenario, m/s.
+pub const BELT_SPEEDS_MPS: [f64; 5] = [0.15, 0.20, 0.25, 0.30, 0.35];
+
+/// Push points: phases of the step at which a push lands.
+pub const PUSH_PHASES: [f64; 5] = [0.1, 0.3, 0.5, 0.7, 0.9];
+
+/// The pushes of the acceptance: −20 N (backward) and +40 N (forward), 0.2 s each.
+pub const PUSH_FORCES_N: [f64; 2] = [-20.0, 40.0];
+
+/// Duration of a push, s.
+pub const PUSH_DURATION_S: f64 = 0.2;
+
+/// Belt speed of the push and restart scenarios, m/s.
+pub const PUSH_BELT_MPS: f64 = 0.25;
+
+/// When a push scenario arms its push, s (it lands at its phase of the next step).
+pub const PUSH_ARM_S: f64 = 3.0;
+
+/// How long after the push arms a push run goes on, s.
+pub const PUSH_WATCH_S: f64 = 4.0;
+
+/// The time after which the constant-belt figures are taken, s.
+pub const SETTLE_S: f64 = 10.0;
+
+/// Within this of the belt speed a step matches it, m/s.
+pub const MATCH_TOLERANCE_MPS: f64 = 0.05;
+
+/// A run of `duration_s` with seed `seed`.
+fn base(duration_s: f64, seed: u64) -> SimWalkOptions {
+    let mut o = SimWalkOptions::new(duration_s);
+    o.seed = seed;
+    o
+}
+
+/// The belt at `speed_mps` for `duration_s` (60 s in the acceptance), walking from the start.
+pub fn constant_belt(speed_mps: f64, duration_s: f64, seed: u64) -> SimWalkOptions {
+    let mut o = base(duration_s, seed);
+    o.belt_speed_mps = Some(speed_mps);
+    o
+}
+
+/// The belt at 0.20 m/s, stepped to 0.30 m/s at `duration_s / 3` and back at `2 duration_s / 3`
+/// (each a ramp at the default 0.5 m/s²). Returns the options and the two change times, s.
+pub fn belt_steps(duration_s: f64, seed: u64) -> (SimWalkOptions, [f64; 2]) {
+    let (t1, t2) = (duration_s / 3.0, 2.0 * duration_s / 3.0);
+    let mut o = base(duration_s, seed);
+    o.belt_profile = Some(BeltProfile {
+        points: vec![(0.0, 0.20), (t1, 0.30), (t2, 0.20)],
+    });
+    (o, [t1, t2])
+}
+
+/// The belt at [`PUSH_BELT_MPS`]; at [`PUSH_ARM_S`] a push of `force_x_n` for
+/// [`PUSH_DURATION_S`] waits for the next step and lands at `phase`; the run watches
+/// [`PUSH_WATCH_S`] more.
+pub fn push_at_phase(force_x_n: f64, phase: f64, seed: u64) -> SimWalkOptions {
+    let mut o = base(PUSH_ARM_S + PUSH_WATCH_S, seed);
+    o.belt_speed_mps = Some(PUSH_BELT_MPS);
+    let mut profile = FaultProfile::none();
+    profile.events.push(FaultEvent {
+        at_s: PUSH_ARM_S,
+        duration_s: PUSH_DURATION_S,
+        fault: Fault::PushAtPhase {
+            force_x_n,
+            force_z_n: 0.0,
+            phase,
+        },
+    });
+    o.faults = Some(profile);
+    o
+}
+
+/// The start and restart cases.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Restart {
+    /// From Stand (belt at rest while the controller ramps), the belt ramps to 0.25 m/s at
+    /// 2 s, Walk at 3 s; 20 s.
+    FromStand,
+    /// As [`Restart::FromStand`], then Stop at 8 s (the braking step, Stand) and Walk again at
+    /// 11 s on the moving belt; 20 s.
+    StopAndWalkAgain,
+    /// From Stand, Walk at 3 s on a belt at rest; the belt ramps to 0.25 m/s from 4 s (on a
+    /// belt at rest the robot walks off its front within some 4 s); 20 s.
+    BeltAfterWalk,
+}
+
+impl Restart {
+    /// Every case, in the table's order.
+    pub const ALL: [Restart; 3] = [
+        Restart::FromStand,
+        Restart::StopAndWalkAgain,
+        Restart::BeltAfterWalk,
+    ];
+
+    /// The case in words.
+    pub fn name(self) -> &'static str {
+        match self {
+            Restart::FromStand => "Stand → Walk on the belt at 0.25",
+            Restart::StopAndWalkAgain => "Walk → stop → Stand → Walk at 0.25",
+            Restart::BeltAfterWalk => "Walk, then the belt starts (→ 0.25)",
+        }
+    }
+}
+
+/// The run of a start-and-restart case.
+pub fn start_restart(case: Restart, seed: u64) -> SimWalkOptions {
+    let mut o = base(20.0, seed);
+    o.start = SimStart::Stand;
+    let (belt, script) = match case {
+        Restart::FromStand => (
+            vec![(0.0, 0.0), (2.0, PUSH_BELT_MPS)],
+            vec![(3.0, OperatorCommand::Walk)],
+        ),
+        Restart::StopAndWalkAgain => (
+            vec![(0.0, 0.0), (2.0, PUSH_BELT_MPS)],
+            vec![
+                (3.0, OperatorCommand::Walk),
+                (8.0, OperatorCommand::Stop),
+                (11.0, OperatorCommand::Walk),
+            ],
+        ),
+        Restart::BeltAfterWalk => (
+            vec![(0.0, 0.0), (4.0, PUSH_BELT_MPS)],
+            vec![(3.0, OperatorCommand::Walk)],
+        ),
+    };
+    o.belt_profile = Some(BeltProfile { points: belt });
+    o.script = script;
+    o
+}
+
+/// The largest |position on the belt| from `after_s` on (up to any fall), m; `None` if the
+/// run ended (or fell) before.
+pub fn max_abs_position_after_m(r: &SimWalkReport, after_s: f64) -> Option<f64> {
+    r.trace
+        .iter()
+        .filter(|s| s.t_s >= after_s)
+        .map(|s| s.position_on_belt_m.abs())
+        .reduce(f64::max)
+}
+
+/// The largest |position on the belt| of the whole run (up to any fall), m.
+pub fn max_abs_position_m(r: &SimWalkReport) -> f64 {
+    max_abs_position_after_m(r, 0.0).unwrap_or(r.position_on_belt_m.abs())
+}
+
+/// Mean walking speed over the belt of the steps after `after_s` (sum of lengths over sum of
+/// durations) divided by the mean belt speed at their touchdowns; `None` without such steps.
+pub fn speed_ratio_after(steps: &[StepRecord], after_s: f64) -> Option<f64> {
+    let steps: Vec<_> = steps.iter().filter(|s| s.t_s >= after_s).collect();
+    if steps.is_empty() {
+        return None;
+    }
+    let length: f64 = steps.iter().map(|s| s.length_m).sum();
+    let duration: f64 = steps.iter().map(|s| s.duration_s).sum();
+    let belt: f64 = steps.iter().map(|s| s.belt_speed_mps).sum::<f64>() / steps.len() as f64;
+    Some(length / duration / belt)
+}
+
+/// Steps after the belt change at `from_s` until the walk matches the belt: the count (from 1)
+/// of the first step from which every step up to `until_s` (or the run's end) has a speed
+/// within [`MATCH_TOLERANCE_MPS`] of the belt at its touchdown; `None` if it never does (or
+/// no step follows).
+pub fn steps_to_match(steps: &[StepRecord], from_s: f64, until_s: f64) -> Option<usize> {
+    let steps: Vec<_> = steps
+        .iter()
+        .filter(|s| s.t_s > from_s && s.t_s <= until_s)
+        .collect();
+    let matched = |s: &StepRecord| (s.speed_mps() - s.belt_speed_mps).abs() <= MATCH_TOLERANCE_MPS;
+    let last_unmatched = steps.iter().rposition(|s| !matched(s));
+    match last_unmatched {
+        None if steps.is_empty() => None,
+        None => Some(1),
+        Some(k) if k + 1 < steps.len() => Some(k + 2),
+        Some(_) => None,
+    }
+}
+
+/// No trip (a step timeout is a stall), no fall, still walking at the end.
+pub fn rides_through(r: &SimWalkReport) -> bool {
+    r.fall.is_none()
+        && r.summary.trip.is_none()
+        && r.sim_fault_s.is_none()
+        && r.summary.final_state == ControlState::Walk
+}
+
+/// What ended a run that did not ride through, in a few words (`fall: off the back of the
+/// belt`, `trip: step_timeout`); `ok` otherwise.
+pub fn outcome(r: &SimWalkReport) -> String {
+    match (r.summary.trip, r.fall) {
+        (Some(t), _) => format!("trip: {}", t.name()),
+        (None, Some((_, what))) => format!("fall: {what}"),
+        (None, None) if r.summary.final_state != ControlState::Walk => {
+            format!("ended in {}", r.summary.final_state.name())
+        }
+        (None, None) => "ok".into(),
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn step(t_s: f64, speed_mps: f64, belt_speed_mps: f64) -> StepRecord {
+        StepRecord {
+            t_s,
+            side: model::Side::Left,
+            length_m: 0.15,
+            duration_s: 0.15 / speed_mps,
+            belt_speed_mps,
+            position_on_belt_m: 0.0,
+        }
+    }
+
+    #[test]
+    fn steps_to_match_counts_to_the_first_step_that_stays_within_the_tolerance() {
+        // The belt steps to 0.30 at 10 s: steps at 0.20, 0.24, 0.27 (in), 0.22 (out), 0.29,
+        // 0.30 (in): matched from the 5th step on.
+        let steps = [
+            step(9.0, 0.2, 0.2),
+            step(11.0, 0.2, 0.3),
+            step(12.0, 0.24, 0.3),
+            step(13.0, 0.27, 0.3),
+            step(14.0, 0.22, 0.3),
+            step(15.0, 0.29, 0.3),
+            step(16.0, 0.30, 0.3),
+            step(21.0, 0.1, 0.2),
+        ];
+        assert_eq!(steps_to_match(&steps, 10.0, 20.0), Some(5));
+        assert_eq!(steps_to_match(&steps, 14.5, 20.0), Some(1));
+        // The last step out of tolerance: never matched.
+        assert_eq!(steps_to_match(&steps, 10.0, 30.0), None);
+        assert_eq!(steps_to_match(&steps, 30.0, 40.0), None);
+        // Speed over belt after 10 s: 0.15 m steps; lengths over durations, over the mean belt.
+        let r = speed_ratio_after(&steps[1..3], 10.0).unwrap();
+        let v = 0.3 / (0.15 / 0.2 + 0.15 / 0.24);
+        assert!((r - v / 0.3).abs() < 1e-12, "{r}");
+        assert_eq!(speed_ratio_after(&steps, 100.0), None);
+    }
+
+    #[test]
+    fn scenario_runs_validate() {
+        let (o, t) = belt_steps(60.0, 1);
+        o.belt_profile.as_ref().unwrap().validate("t").unwrap();
+        assert_eq!(t, [20.0, 40.0]);
+        for case in Restart::ALL {
+            let o = start_restart(case, 2);
+            o.belt_profile.as_ref().unwrap().validate("t").unwrap();
+            assert_eq!(o.start, SimStart::Stand);
+        }
+        push_at_phase(-20.0, 0.3, 1)
+            .faults
+            .unwrap()
+            .validate("t")
+            .unwrap();
+    }
+}

@@ -1,0 +1,175 @@
+//! Issue #29's treadmill acceptance on the simulated ADAM (`runtime::sim::scenarios`, the same
+//! runs as `adam bench treadmill`), seeds 1–5. The thresholds that need the controller's speed
+//! control (the speed regulator and the belt-position loop) are `#[ignore = "needs speed
+//! control"]` until it lands; what holds today is tested as is: leaving the belt is a fall,
+//! and a run that falls reports the figures up to the fall, never after it.
+
+use drivers::sim::robot::{BeltEnd, FallCause};
+use runtime::sim::run::{walk, SimWalkReport};
+use runtime::sim::scenarios::{
+    belt_steps, constant_belt, max_abs_position_after_m, max_abs_position_m, outcome,
+    push_at_phase, rides_through, speed_ratio_after, start_restart, steps_to_match, Restart,
+    BELT_SPEEDS_MPS, PUSH_FORCES_N, PUSH_PHASES, SETTLE_S,
+};
+use runtime::Setup;
+
+const SEEDS: [u64; 5] = [1, 2, 3, 4, 5];
+
+fn run(options: &runtime::sim::run::SimWalkOptions) -> SimWalkReport {
+    let setup = Setup::shipped().expect("shipped config and gait load");
+    walk(&setup, options).expect("the simulated run starts")
+}
+
+#[test]
+fn walking_slower_than_the_belt_ends_off_the_back_of_the_belt_and_reports_up_to_the_fall() {
+    // The shipped gait walks 0.16 m/s; on a belt at 0.30 m/s the robot drifts back 0.14 m/s
+    // and its rear stance foot passes the back end (0.8 m behind the centre) after some 5 s.
+    let r = run(&constant_belt(0.30, 15.0, 1));
+    println!("{r}");
+    let (t_s, what) = r.fall.expect("fell off the belt");
+    assert_eq!(what, FallCause::OffBelt(BeltEnd::Back));
+    assert!((3.0..10.0).contains(&t_s), "fell at {t_s} s");
+    assert_eq!(r.walked_s, t_s);
+    // Figures up to the fall: the position is the one at the fall, at the back end (the hip
+    // is within a step of the foot that left the belt), and the drift matches it.
+    assert!(
+        (-0.8..-0.6).contains(&r.position_on_belt_m),
+        "{}",
+        r.position_on_belt_m
+    );
+    assert!((r.drift_m - r.position_on_belt_m).abs() < 1e-9, "{r}");
+    // Nothing measured after it: no step and no truth sample past the fall.
+    assert!(r.step_records.iter().all(|s| s.t_s <= t_s));
+    assert!(r.trace.iter().all(|s| s.t_s <= t_s));
+    assert!(r.trace.last().is_some_and(|s| s.t_s > t_s - 0.02));
+    let text = r.to_string();
+    assert!(
+        text.contains("steps up to the fall")
+            && text.contains("position on the belt at the fall")
+            && text.contains("off the back of the belt"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_torso_fall_reports_the_drift_at_the_fall_not_where_the_body_lies_later() {
+    // A 400 N backward shove for 0.3 s throws the robot down; the run goes on 3 s after it.
+    let mut o = constant_belt(0.167, 6.0, 1);
+    o.belt_length_m = f64::INFINITY;
+    let mut profile = runtime::sim::faults::FaultProfile::none();
+    profile
+        .events
+        .push(runtime::sim::treadmill::parse_push("1.5:-400:0.3", "t").expect("a push"));
+    o.faults = Some(profile);
+    let r = run(&o);
+    println!("{r}");
+    let (t_s, _) = r.fall.expect("the shove throws it down");
+    assert!(t_s < 3.0, "{t_s}");
+    // The drift and the position are at the fall: the last truth sample is within 10 ms of it
+    // and agrees with them to the motion of those 10 ms (at its speed, 10 % margin, + 1 mm).
+    let last = r.trace.last().expect("truth up to the fall");
+    assert!(t_s - last.t_s <= 0.0105, "{} s vs {t_s} s", last.t_s);
+    let moved_m = (last.position_on_belt_m - r.position_on_belt_m).abs();
+    assert!(
+        moved_m <= 1.1 * last.base_velocity_mps.abs() * 0.01 + 1e-3,
+        "{moved_m} m at {} m/s",
+        last.base_velocity_mps
+    );
+    assert!((r.drift_m - r.position_on_belt_m).abs() < 1e-9, "{r}");
+    assert!(r.walked_s == t_s && r.summary.end_time_s > t_s + 2.0);
+}
+
+#[test]
+fn the_belt_profile_ramps_at_the_set_acceleration_in_the_truth() {
+    let (o, [t1, t2]) = belt_steps(12.0, 1);
+    let r = run(&o);
+    for s in &r.trace {
+        let expected = if s.t_s <= t1 {
+            0.20
+        } else if s.t_s <= t2 {
+            (0.20 + 0.5 * (s.t_s - t1)).min(0.30)
+        } else {
+            (0.30 - 0.5 * (s.t_s - t2)).max(0.20)
+        };
+        // The profile acts at the loop's ticks (1 ms): within 1 ms of ramp, 5e-4 m/s.
+        assert!(
+            (s.belt_speed_mps - expected).abs() < 6e-4,
+            "{} s: {} vs {expected}",
+            s.t_s,
+            s.belt_speed_mps
+        );
+        if r.fall.is_some() {
+            break;
+        }
+    }
+}
+
+/// Belt 0.15–0.35 m/s for 60 s: no fall, no trip; after 10 s within ±0.10 m of the centre and
+/// within 2 % of the belt's speed.
+#[test]
+#[ignore = "needs speed control"]
+fn walks_every_belt_speed_for_60_s_in_the_middle_at_the_belt_speed() {
+    for v in BELT_SPEEDS_MPS {
+        for seed in SEEDS {
+            let r = run(&constant_belt(v, 60.0, seed));
+            assert!(rides_through(&r), "{v} m/s seed {seed}: {}", outcome(&r));
+            let p = max_abs_position_after_m(&r, SETTLE_S).expect("walked past 10 s");
+            assert!(p <= 0.10, "{v} m/s seed {seed}: |position| {p} m");
+            let ratio = speed_ratio_after(&r.step_records, SETTLE_S).expect("steps");
+            assert!((ratio - 1.0).abs() <= 0.02, "{v} m/s seed {seed}: {ratio}");
+        }
+    }
+}
+
+/// Belt 0.20 → 0.30 → 0.20 m/s: within 0.05 m/s of the belt in ≤ 8 steps after each change,
+/// within ±0.15 m of the centre throughout.
+#[test]
+#[ignore = "needs speed control"]
+fn follows_a_belt_step_up_and_back_within_8_steps() {
+    for seed in SEEDS {
+        let (o, [t1, t2]) = belt_steps(60.0, seed);
+        let r = run(&o);
+        assert!(rides_through(&r), "seed {seed}: {}", outcome(&r));
+        for (from, until) in [(t1, t2), (t2, 60.0)] {
+            let n = steps_to_match(&r.step_records, from, until);
+            assert!(
+                n.is_some_and(|n| n <= 8),
+                "seed {seed} from {from} s: {n:?}"
+            );
+        }
+        let p = max_abs_position_m(&r);
+        assert!(p <= 0.15, "seed {seed}: |position| {p} m");
+    }
+}
+
+/// −20 N and +40 N for 0.2 s at five points of the step ride through in ≥ 4 of 5 seeds.
+#[test]
+#[ignore = "needs speed control"]
+fn rides_through_pushes_at_every_point_of_the_step() {
+    for force in PUSH_FORCES_N {
+        for phase in PUSH_PHASES {
+            let ok = SEEDS
+                .iter()
+                .filter(|&&seed| rides_through(&run(&push_at_phase(force, phase, seed))))
+                .count();
+            assert!(ok >= 4, "{force} N at {phase}: {ok} of 5");
+        }
+    }
+}
+
+/// From Stand, restart after a stop, and the belt started after the walk: no trip or fall.
+#[test]
+#[ignore = "needs speed control"]
+fn starts_and_restarts_on_the_moving_belt() {
+    for case in Restart::ALL {
+        for seed in SEEDS {
+            let r = run(&start_restart(case, seed));
+            assert!(
+                rides_through(&r),
+                "{} seed {seed}: {}",
+                case.name(),
+                outcome(&r)
+            );
+        }
+    }
+}
