@@ -31,8 +31,11 @@
 //! - [`verify`]: the independent check of a gait (`adam gait check`).
 //! - [`library`]: a gait per speed for one design, each warm-started from its neighbour and
 //!   verified (`adam plan library`), written as a [`model::library::GaitLibrary`].
-//! - [`codesign`]: thigh and shin lengths as variables (`adam codesign`), and the convergence
-//!   study.
+//! - [`codesign`]: thigh and shin lengths as variables (`adam codesign`), the convergence
+//!   study, the cost landscape over the design box with the constraints that hold the optimum
+//!   (`codesign/landscape.rs`, `codesign/activity.rs`), the audit of the constraints that are
+//!   ours (`codesign/audit.rs`) and one design for several speeds (`codesign/speeds.rs`);
+//!   planner/CODESIGN.md has the results.
 //!
 //! ```no_run
 //! use planner::{config::PlannerConfig, plan::plan_gait};
