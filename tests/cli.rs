@@ -440,7 +440,7 @@ fn bench_check_reports_identical_verifications() {
         "{out}"
     );
     assert!(out.contains("the reports are identical"), "{out}");
-    assert!(out.contains("0.86"), "|λ|max of the shipped gait: {out}");
+    assert!(out.contains("0.87"), "|λ|max of the shipped gait: {out}");
     let (ok, _, err) = adam(&["bench", "check", "--runs", "0"]);
     assert!(!ok && err.contains("--runs must be at least 1"), "{err}");
 }
@@ -499,7 +499,7 @@ fn plan_writes_a_gait_that_gait_check_passes_and_shifted_copies_fail() {
         "factor",
         "kkt sol",
         "step length 0.1500 m",
-        "|λ|max 0.86",
+        "|λ|max 0.87",
         "stable periodic orbit",
     ] {
         assert!(out.contains(expected), "`{expected}` missing from\n{out}");
