@@ -56,15 +56,19 @@ fn uncentred_ripopt_plan() -> planner::plan::PlannedGait {
     )
     .expect("solves");
     assert!(solved.status.is_success(), "{:?}", solved.status);
-    assert!((costed.cost_of_transport(&solved.x) / 0.020842 - 1.0).abs() < 1e-4);
+    let cot = costed.cost_of_transport(&solved.x);
+    assert!(
+        (cot / 0.020031 - 1.0).abs() < 1e-4,
+        "cost of transport {cot}"
+    );
     planned.x = solved.x;
     planned
 }
 
-/// The co-designed lengths every sweep run reaches (README: 0.3488 / 0.3500 m, std < 1e-4 m
-/// over the 25 runs), to that spread.
+/// The co-designed lengths the sweep runs reach, to 1e-4 m: 0.3144 / 0.3500 m with the A1
+/// armature in the model (without it, 0.3488 / 0.3500 m, std < 1e-4 m over the 25 runs).
 fn assert_at_the_sweep_optimum([thigh_m, shin_m]: [f64; 2]) {
-    assert!((thigh_m - 0.3488).abs() < 1e-4, "thigh {thigh_m} m");
+    assert!((thigh_m - 0.3144).abs() < 1e-4, "thigh {thigh_m} m");
     assert!((shin_m - 0.3500).abs() < 1e-4, "shin {shin_m} m");
 }
 
