@@ -180,19 +180,29 @@ fn combine(parts: &[Part]) -> LinkMassProperties {
     }
 }
 
-/// The mass model's one knob: a scale on the leg tubes' mass per metre (their linear density,
+/// The mass model's knobs: a scale on the leg tubes' mass per metre (their linear density,
 /// 0.645 kg/m at 1), for showing how the co-design's optimum moves with heavier or lighter
-/// links. The brackets, the knee's A1 and the foot do not scale.
+/// links (the brackets, the knee's A1 and the foot do not scale); and whether the URDF carries
+/// the A1 drives.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MassModel {
     /// Multiplies the tubes' linear density (1 = the Ø40 × 2 mm aluminium 6061 tube).
     pub link_density_scale: f64,
+    /// Write the A1 drives into the URDF: `<dynamics damping>` on the hip and knee and a
+    /// `<transmission>` per joint with the A1's gear ratio, rotor inertia (the armature
+    /// N² J_rotor = 0.01 kg·m² at the joint), torque constant and winding resistance (what the
+    /// electrical cost needs). Off by default: the shipped robot and its gaits, and the
+    /// runtime's gains tuned on them, are the rigid-body model; with the armature the runtime's
+    /// stand and stop tests and two fault scenarios need re-tuning (issue #28 item 4, open).
+    /// `configs/robots/adam_planar_a1.urdf` is the hardware ADAM with the drives.
+    pub a1_drives: bool,
 }
 
 impl Default for MassModel {
     fn default() -> Self {
         Self {
             link_density_scale: 1.0,
+            a1_drives: false,
         }
     }
 }
@@ -439,6 +449,11 @@ pub fn generate_urdf_with(design: &DesignLengths, mass: &MassModel) -> Result<St
     design.validate()?;
     mass.validate()?;
     let fits = InertiaFits::adam_with(mass);
+    let damping = if mass.a1_drives {
+        format!("    <dynamics damping=\"{A1_JOINT_DAMPING_NMS_PER_RAD}\"/>\n")
+    } else {
+        String::new()
+    };
     let (tm, th, ti) = torso_properties();
     let (fm, fh, fi) = FOOT;
     let mut s = String::new();
@@ -490,7 +505,7 @@ pub fn generate_urdf_with(design: &DesignLengths, mass: &MassModel) -> Result<St
         let (hl, hu) = HIP_PITCH_LIMITS_RAD;
         let (kl, ku) = KNEE_PITCH_LIMITS_RAD;
         s.push_str(&format!(
-            "  <joint name=\"{side}_hip_pitch\" type=\"revolute\">\n    <parent link=\"torso\"/>\n    <child link=\"{side}_thigh\"/>\n    <origin xyz=\"0 {y} 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n    <dynamics damping=\"{A1_JOINT_DAMPING_NMS_PER_RAD}\"/>\n    <limit lower=\"{hl}\" upper=\"{hu}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
+            "  <joint name=\"{side}_hip_pitch\" type=\"revolute\">\n    <parent link=\"torso\"/>\n    <child link=\"{side}_thigh\"/>\n    <origin xyz=\"0 {y} 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n{damping}    <limit lower=\"{hl}\" upper=\"{hu}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
         ));
         s.push_str(&format!(
             "  <joint name=\"{side}_thigh_design\" type=\"prismatic\">\n    <parent link=\"{side}_thigh\"/>\n    <child link=\"{side}_thigh_virtual\"/>\n    <origin xyz=\"0 0 {}\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 0 -1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n  </joint>\n",
@@ -499,7 +514,7 @@ pub fn generate_urdf_with(design: &DesignLengths, mass: &MassModel) -> Result<St
             DESIGN_MAX_M - lt
         ));
         s.push_str(&format!(
-            "  <joint name=\"{side}_knee_pitch\" type=\"revolute\">\n    <parent link=\"{side}_thigh_virtual\"/>\n    <child link=\"{side}_shin\"/>\n    <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n    <dynamics damping=\"{A1_JOINT_DAMPING_NMS_PER_RAD}\"/>\n    <limit lower=\"{kl}\" upper=\"{ku}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
+            "  <joint name=\"{side}_knee_pitch\" type=\"revolute\">\n    <parent link=\"{side}_thigh_virtual\"/>\n    <child link=\"{side}_shin\"/>\n    <origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 1 0\"/>\n{damping}    <limit lower=\"{kl}\" upper=\"{ku}\" effort=\"{A1_TORQUE_LIMIT_NM}\" velocity=\"{A1_SPEED_LIMIT_RAD_S}\"/>\n  </joint>\n"
         ));
         s.push_str(&format!(
             "  <joint name=\"{side}_shin_design\" type=\"prismatic\">\n    <parent link=\"{side}_shin\"/>\n    <child link=\"{side}_shin_virtual\"/>\n    <origin xyz=\"0 0 {}\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0 0 -1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n  </joint>\n",
@@ -513,7 +528,9 @@ pub fn generate_urdf_with(design: &DesignLengths, mass: &MassModel) -> Result<St
     }
     for side in ["left", "right"] {
         for joint in ["hip_pitch", "knee_pitch"] {
-            s.push_str(&a1_transmission(&format!("{side}_{joint}")));
+            if mass.a1_drives {
+                s.push_str(&a1_transmission(&format!("{side}_{joint}")));
+            }
         }
     }
     s.push_str("</robot>\n");

@@ -111,6 +111,7 @@ fn link_density_scale_scales_the_tubes_and_the_fits_follow() {
     let one = MassModel::default();
     let heavy = MassModel {
         link_density_scale: 1.5,
+        ..MassModel::default()
     };
     for l in [0.15, 0.24, 0.35] {
         // Tube mass by hand: ρ π (r_o² − r_i²) × its length (thigh: L − 0.10 m, shin: L − 0.07 m).
@@ -144,6 +145,7 @@ fn link_density_scale_scales_the_tubes_and_the_fits_follow() {
             &DesignLengths::ADAM,
             &MassModel {
                 link_density_scale: bad,
+                ..MassModel::default()
             },
         )
         .unwrap_err()

@@ -46,7 +46,7 @@ use crate::config::{InertiaCoupling, PlannerConfig};
 use crate::nlp;
 use crate::plan::{self, PlannedGait, Progress, StageReport};
 use crate::{PlannerError, Result};
-use model::design::{generate_model, DesignLengths};
+use model::design::DesignLengths;
 use std::time::Instant;
 
 /// One solve of the outer loop.
@@ -114,7 +114,7 @@ pub fn codesign(
     config.validate("planner config")?;
     let start = Instant::now();
     let lengths = config.codesign.initial_m;
-    let (model, urdf) = generate(lengths)?;
+    let (model, urdf) = generate(lengths, config.codesign.a1_drives)?;
     let initial = plan::plan_gait(&model, urdf_ref, &urdf, config, on_progress)?;
     let mut r = codesign_from(config, urdf_ref, &initial, lengths, lengths, on_progress)?;
     r.wall_time_s = start.elapsed().as_secs_f64();
@@ -185,7 +185,7 @@ fn codesign_run(
 ) -> Result<CodesignResult> {
     let start = Instant::now();
     let c = &config.codesign;
-    let (mut model, mut urdf) = generate(model_lengths)?;
+    let (mut model, mut urdf) = generate(model_lengths, config.codesign.a1_drives)?;
     let mut nominal = model_lengths;
     let mut lengths = start_lengths;
     let mut x = initial.x.clone();
@@ -265,7 +265,7 @@ fn codesign_run(
             .max((found[1] - lengths[1]).abs());
         lengths = found;
         nominal = found;
-        (model, urdf) = generate(lengths)?;
+        (model, urdf) = generate(lengths, config.codesign.a1_drives)?;
         x = xs[..n_fixed].to_vec();
         if exact || moved < c.tolerance_m {
             converged = true;
@@ -363,18 +363,23 @@ fn nlp_constraints(problem: &HzdProblem) -> usize {
     crate::nlp::NlpProblem::num_constraints(problem)
 }
 
-fn generate(lengths: [f64; 2]) -> Result<(model::PlanarModel, String)> {
+fn generate(lengths: [f64; 2], a1_drives: bool) -> Result<(model::PlanarModel, String)> {
     let design = DesignLengths {
         thigh_length_m: lengths[0],
         shin_length_m: lengths[1],
     };
-    let (model, urdf) = generate_model(&design).map_err(|e| PlannerError::Robot {
-        robot: "adam_planar".into(),
-        reason: format!(
-            "GenerateModel at thigh {} m, shin {} m: {e}",
-            lengths[0], lengths[1]
-        ),
-    })?;
+    let mass = model::design::MassModel {
+        a1_drives,
+        ..Default::default()
+    };
+    let (model, urdf) =
+        model::design::generate_model_with(&design, &mass).map_err(|e| PlannerError::Robot {
+            robot: "adam_planar".into(),
+            reason: format!(
+                "GenerateModel at thigh {} m, shin {} m: {e}",
+                lengths[0], lengths[1]
+            ),
+        })?;
     Ok((model, urdf))
 }
 
@@ -514,7 +519,7 @@ pub fn fixed_design(
     lengths_m: [f64; 2],
 ) -> std::result::Result<SweepOutcome, String> {
     let run = || -> Result<SweepOutcome> {
-        let (model, urdf) = generate(lengths_m)?;
+        let (model, urdf) = generate(lengths_m, config.codesign.a1_drives)?;
         let biped = PlanarBiped::new(model, config.gait.stance_leg, &[])?;
         let problem = HzdProblem::new(biped, config.clone(), initial.x.clone(), true)?;
         let (x, report) = plan::solve_stage(&problem, "fixed design", config, &mut |_| {})?;

@@ -321,6 +321,11 @@ pub struct CodesignConfig {
     /// over the design box; `--grid` overrides it), at least 2.
     #[serde(default = "default_landscape_grid")]
     pub landscape_grid: usize,
+    /// GenerateModel writes the A1 drives into each design's robot
+    /// ([`model::design::MassModel::a1_drives`]: the rotors' armature, and the constants the
+    /// electrical cost needs). Default false: the rigid-body robot the shipped gaits use.
+    #[serde(default)]
+    pub a1_drives: bool,
 }
 
 fn default_landscape_grid() -> usize {
@@ -395,6 +400,7 @@ impl Default for CodesignConfig {
             max_outer_iterations: 10,
             sweep: SweepConfig::default(),
             landscape_grid: default_landscape_grid(),
+            a1_drives: false,
         }
     }
 }

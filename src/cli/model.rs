@@ -4,7 +4,7 @@
 use crate::cli::paths::writable;
 use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
-use model::design::{generate_urdf, DesignLengths};
+use model::design::DesignLengths;
 use model::PlanarModel;
 use std::path::PathBuf;
 
@@ -33,6 +33,11 @@ pub(crate) struct GenerateUrdfArgs {
     /// Write over an existing --out.
     #[arg(long, requires = "out")]
     force: bool,
+    /// Add the A1 drives (joint damping, and a transmission per joint with the A1's gear ratio,
+    /// rotor inertia, torque constant and winding resistance), as in
+    /// configs/robots/adam_planar_a1.urdf.
+    #[arg(long)]
+    a1_drives: bool,
 }
 
 /// Parses `thigh=0.24,shin=0.25`.
@@ -101,14 +106,21 @@ pub(crate) fn write_urdf(args: GenerateUrdfArgs) -> Result<()> {
         shin,
         out,
         force,
+        a1_drives,
     } = args;
     if let Some(path) = &out {
         writable(path, force)?;
     }
-    let text = generate_urdf(&DesignLengths {
-        thigh_length_m: thigh,
-        shin_length_m: shin,
-    })?;
+    let text = model::design::generate_urdf_with(
+        &DesignLengths {
+            thigh_length_m: thigh,
+            shin_length_m: shin,
+        },
+        &model::design::MassModel {
+            a1_drives,
+            ..Default::default()
+        },
+    )?;
     match out {
         Some(path) => {
             std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?

@@ -262,7 +262,7 @@ pub fn codesign_speeds(
 ) -> Result<MultiSpeedResult> {
     let c = &config.codesign;
     let lengths = c.initial_m;
-    let (model, urdf) = generate(lengths)?;
+    let (model, urdf) = generate(lengths, config.codesign.a1_drives)?;
     let at_speed = |v: f64| {
         let mut cfg = config.clone();
         cfg.gait.speed_mps = Some([v, v]);
@@ -323,7 +323,7 @@ pub fn codesign_speeds(
         })
         .collect();
     // Each speed's gait on the co-designed robot, design fixed, from its block's solution.
-    let (model, urdf) = generate(found)?;
+    let (model, urdf) = generate(found, config.codesign.a1_drives)?;
     let mut gaits = Vec::new();
     for (s, &v) in speeds_mps.iter().enumerate() {
         let cfg = at_speed(v)?;
