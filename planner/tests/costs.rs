@@ -12,7 +12,7 @@ use planner::nlp::NlpProblem;
 
 const URDF: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
-    "/../configs/robots/adam_planar.urdf"
+    "/../configs/robots/adam_planar_a1.urdf"
 );
 const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/planner/adam.toml");
 

@@ -62,8 +62,9 @@ fn the_relief_of_the_step_length_bound_predicts_the_cost_of_moving_it() {
         Some(Some((BoundSide::Lower, lower)))
     );
     assert!(step.relief_per_unit > 0.0, "{step:?}");
-    // Tighten the bound by 5 mm: the optimum moves with it, by the relief to first order.
-    let delta_m = 5e-3;
+    // Tighten the bound by 1 mm: the optimum moves with it, by the relief to first order (over
+    // 5 mm the curvature of the cost already made a 12 % difference on the graded mesh).
+    let delta_m = 1e-3;
     let mut moved = cfg.clone();
     moved.gait.step_length_m[0] = lower + delta_m;
     let q = fixed_problem(&moved);

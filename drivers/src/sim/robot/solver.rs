@@ -390,7 +390,13 @@ mod tests {
     /// planner's collocation imposes: D q̈ + H = B u + Jᵀ λ on every coordinate that moves.
     #[test]
     fn stance_dynamics_with_armature_and_friction_satisfy_the_planners_inverse_dynamics() {
-        let mut m = adam();
+        let mass = model::design::MassModel {
+            a1_drives: true,
+            ..Default::default()
+        };
+        let (mut m, _) =
+            model::design::generate_model_with(&model::design::DesignLengths::ADAM, &mass)
+                .expect("ADAM with the A1 drives");
         for j in &mut m.joints {
             if let model::JointKind::Revolute { .. } = j.kind {
                 j.drive.damping_nms_per_rad = 0.8;
