@@ -215,7 +215,7 @@ fn default_max_step_duration_factor() -> f64 {
 }
 
 fn default_stop_step_length_m() -> f64 {
-    0.30
+    0.24
 }
 
 fn default_impact_min_phase() -> f64 {

@@ -1,7 +1,13 @@
-//! Walk → Stop → Stand → Walk again on the simulated robot (issue #29: the second Walk trips
-//! torque saturation 1.1 s after it is asked for, at the end of the launch: measured on this
-//! branch, the left knee at −33.5 N·m against a 33 N·m limit for 50 ticks at 11.12 s, launching
-//! from the braking step's 0.30 m stance. Not fixed yet: the test is ignored until it is).
+//! Walk → Stop → Stand → Walk again on the simulated robot (issue #29 item 5), seeds 1–5, on the
+//! belt at the gait's speed and at 0.25 m/s.
+//!
+//! What broke: with the braking step 0.30 m long, Stand after the Stop stood on feet 0.34 m
+//! apart with the torso midway; the launch of the second Walk carries the torso to 4 cm behind
+//! the front foot, which the straight rear leg allows only 5 cm lower, with the stance knee bent
+//! 0.9 rad. Once the rear foot lifted, that knee could not carry the robot: torque saturation
+//! (left knee −33.5 N·m against 33 N·m for 50 ticks) 1.1 s after Walk. The braking step is now
+//! 0.24 m (`walk.stop_step_length_m`), and a launch ends less far forward (and faster) when the
+//! rear leg would make the torso drop more than 3 cm.
 
 use drivers::sim::robot::SimEvent;
 use runtime::control::{ControlState, OperatorCommand};
@@ -9,12 +15,14 @@ use runtime::rt_loop::{LoopOptions, SimulatedClock};
 use runtime::sim::run::{sim_backend, SimWalkOptions};
 use runtime::Setup;
 
-#[test]
-#[ignore = "issue #29 item 5: Walk after Stop trips torque saturation at the end of the launch"]
-fn walk_after_a_stop_walks_again() {
+/// Walks from the planned state, Stop at 3 s, Walk at 10 s, to 20 s: no trip, no fall, the
+/// states in order, and at least 8 steps after the second Walk.
+fn walk_stop_walk(seed: u64, belt_speed_mps: Option<f64>) {
     let setup = Setup::shipped().expect("setup");
     let end_s = 20.0;
-    let walk = SimWalkOptions::new(end_s);
+    let mut walk = SimWalkOptions::new(end_s);
+    walk.seed = seed;
+    walk.belt_speed_mps = belt_speed_mps;
     let backend = sim_backend(&setup, &walk).expect("backend");
     let mut options = LoopOptions::simulation(end_s);
     options.start_walking = true;
@@ -22,13 +30,16 @@ fn walk_after_a_stop_walks_again() {
     let (summary, backend) =
         runtime::run(&setup, backend, SimulatedClock::default(), options, None).expect("run");
     let sim = backend.plant();
-    eprintln!("{:?}\ntrip {:?}", summary.transitions, summary.trip);
+    let context = format!(
+        "seed {seed}, belt {belt_speed_mps:?}: {:?}",
+        summary.transitions
+    );
+    assert_eq!(summary.trip, None, "{context}");
     let fall = sim
         .events()
         .iter()
         .find(|e| matches!(e, SimEvent::Fall { .. } | SimEvent::Fault { .. }));
-    assert_eq!(summary.trip, None);
-    assert!(fall.is_none(), "{fall:?}");
+    assert!(fall.is_none(), "{fall:?} {context}");
     let states: Vec<_> = summary.transitions.iter().map(|t| t.2).collect();
     assert_eq!(
         states,
@@ -37,13 +48,31 @@ fn walk_after_a_stop_walks_again() {
             ControlState::Stop,
             ControlState::Stand,
             ControlState::Walk
-        ]
+        ],
+        "{context}"
     );
-    // Walking again: steps after the second Walk.
+    // Walking again: steps after the second Walk's launch (1 s).
     let steps = sim
         .events()
         .iter()
         .filter(|e| matches!(e, SimEvent::Touchdown(td) if td.t_s > 11.0))
         .count();
-    assert!(steps >= 8, "{steps} touchdowns after the second Walk");
+    assert!(
+        steps >= 8,
+        "{steps} touchdowns after the second Walk, {context}"
+    );
+}
+
+#[test]
+fn walk_after_a_stop_walks_again() {
+    for seed in 1..=5 {
+        walk_stop_walk(seed, None);
+    }
+}
+
+#[test]
+fn walk_after_a_stop_walks_again_on_a_belt_at_a_quarter_metre_per_second() {
+    for seed in 1..=5 {
+        walk_stop_walk(seed, Some(0.25));
+    }
 }

@@ -2,7 +2,7 @@
 //!
 //! The co-designed gait lands each step at 0.40 m/s (torso): more than double support can
 //! absorb over a 0.15 m step (the capture point lies beyond the front foot). After Stop, the
-//! step under way ends, then one braking step of `walk.stop_step_length_m` (0.30 m) lands with
+//! step under way ends, then one braking step of `walk.stop_step_length_m` (0.24 m) lands with
 //! the front foot far enough ahead, and Stand holds the landing pose: the robot rocks from foot
 //! to foot a few times and comes to rest on both feet.
 

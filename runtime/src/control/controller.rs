@@ -37,14 +37,16 @@
 //! can only bring the robot to rest if its capture point `x + ẋ/ω` (ω = √(g/h)) lies between the
 //! feet; over a 0.15 m step it lies about 3 cm beyond the front foot, so holding any pose after
 //! a normal step vaults the robot over it (measured). The braking step lands the front foot
-//! `walk.stop_step_length_m` (0.30 m) ahead instead: the step's stance-leg angle runs on to the
+//! `walk.stop_step_length_m` (0.24 m) ahead instead: the step's stance-leg angle runs on to the
 //! braking pose's θ (so τ still ends at 1) and, from τ = 0.3, the outputs blend (minimum jerk)
 //! from y^d(τ) into that pose, found by inverse kinematics at start-up
 //! (`double_support`: both feet down, the torso where the gait's first pose has it relative to
 //! the feet, lowered to keep the legs' reach). The longer landing loses more speed in the
 //! impact and leaves the capture point inside the feet; Stand then holds the landed joint
 //! angles and the robot rocks from foot to foot a few times and comes to rest
-//! (`runtime/tests/stop_sim.rs`).
+//! (`runtime/tests/stop_sim.rs`). Not longer: Walk again launches from that stance, and from a
+//! 0.30 m braking step (feet 0.34 m apart) the launch bent the stance knee until it saturated
+//! once the rear foot lifted (`runtime/tests/restart_sim.rs`).
 
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
@@ -52,7 +54,7 @@ use super::speed::{SpeedLibrary, SpeedRegulator};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
     braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
-    MIN_JERK_PEAK_RATE, PLANNED_PITCH_SIGMA_RAD, STAND_DELAY_S,
+    MIN_JERK_PEAK_RATE, PLANNED_PITCH_SIGMA_RAD, STAND_DELAY_S, START_BLEND_SPAN,
 };
 use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
 use crate::estimator::{EstimatorParams, PitchEstimator};
@@ -549,10 +551,7 @@ impl Controller {
                     for (i, o) in offset.iter_mut().enumerate() {
                         *o = leg_q[self.gait.out_slot[stance][i]] - eval.y[i];
                     }
-                    self.start_blend = Some(StartBlend {
-                        from_phase: eval.phase.clamp(0.0, 1.0),
-                        offset,
-                    });
+                    self.start_blend = Some(StartBlend::new(eval.phase.clamp(0.0, 1.0), offset));
                     // The first step starts now (the step timeout and a time-based phase
                     // count from here).
                     self.step_start_t_s = t;
@@ -719,6 +718,7 @@ impl Controller {
         self.start_blend = Some(StartBlend {
             from_phase: eval.phase.clamp(0.0, 1.0),
             offset,
+            span: START_BLEND_SPAN,
         });
         *eval = self.references(eval.phase, eval.phase_rate, eval.foot_height_m);
         rate

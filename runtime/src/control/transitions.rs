@@ -90,6 +90,11 @@ pub(super) const BRAKE_BLEND_FROM: f64 = 0.3;
 pub(super) const LAUNCH_BEHIND_M: f64 = 0.04;
 /// ... arriving at this forward speed, m/s.
 pub(super) const LAUNCH_SPEED_MPS: f64 = 0.2;
+/// ... (or less far forward, if the rear foot would make the torso drop more than this, m) ...
+pub(super) const LAUNCH_MAX_DROP_M: f64 = 0.03;
+/// ... (and then faster: this margin over the speed that carries an inverted pendulum over the
+/// stance foot) ...
+pub(super) const LAUNCH_PASS_MARGIN: f64 = 1.3;
 /// ... in this long, s.
 pub(super) const LAUNCH_DURATION_S: f64 = 1.0;
 /// ... with the torso no higher than keeps the rear leg within this fraction of its reach.
@@ -101,6 +106,14 @@ pub(super) const LAUNCH_POSE_KI_PER_S: f64 = 3.0;
 pub(super) const START_BLEND_SPAN: f64 = 0.3;
 /// ... and the swing knee's over this much.
 pub(super) const START_KNEE_BLEND_SPAN: f64 = 0.2;
+/// A launch's end pose further than this from the gait's (largest output offset, rad) blends
+/// over proportionally more phase: after a Stop the launch starts from the braking step's wide
+/// stance and ends with the stance knee ~0.6 rad more bent than the gait's (the torso lowered to
+/// keep the rear foot in reach); blended out over 0.3 of phase, raising the torso asked the
+/// stance knee for −33.5 N·m against its 33 N·m limit (measured, `runtime/tests/restart_sim.rs`).
+pub(super) const START_BLEND_OFFSET_RAD: f64 = 0.2;
+/// ... but the blend ends by this phase, before the touchdown.
+pub(super) const START_BLEND_END_PHASE: f64 = 0.9;
 
 /// Stand starts this long after the braking step's touchdown, s: the motor replies then
 /// report the post-impact pose.
@@ -117,6 +130,8 @@ pub(super) struct Launch {
     pub(super) start_t_s: f64,
     pub(super) from: TorsoPose,
     pub(super) to: TorsoPose,
+    /// Forward torso speed at the launch's end, m/s.
+    pub(super) speed_mps: f64,
     /// The rear foot relative to the stance foot, m.
     pub(super) other_foot_xz_m: [f64; 2],
     /// The last joint solution (the next tick's Newton start), model rad.
@@ -133,6 +148,24 @@ pub(super) struct Launch {
 pub(super) struct StartBlend {
     pub(super) from_phase: f64,
     pub(super) offset: [f64; OUTPUTS],
+    /// Phase over which the outputs other than the swing knee blend in.
+    pub(super) span: f64,
+}
+
+impl StartBlend {
+    /// A blend from `offset` starting at `from_phase`, over [`START_BLEND_SPAN`] of phase, or
+    /// proportionally more for offsets beyond [`START_BLEND_OFFSET_RAD`] (at most until
+    /// [`START_BLEND_END_PHASE`]).
+    pub(super) fn new(from_phase: f64, offset: [f64; OUTPUTS]) -> Self {
+        let largest = offset.iter().fold(0.0_f64, |m, o| m.max(o.abs()));
+        let wanted = START_BLEND_SPAN * (largest / START_BLEND_OFFSET_RAD).max(1.0);
+        let room = (START_BLEND_END_PHASE - from_phase).max(START_BLEND_SPAN);
+        Self {
+            from_phase,
+            offset,
+            span: wanted.min(room),
+        }
+    }
 }
 
 /// The braking step of a Stop: a longer step whose touchdown leaves the walking speed inside

@@ -7,9 +7,10 @@ use crate::control::double_support::{self, Geometry};
 use crate::control::gait_table::side_index;
 use crate::control::tick::{CommandMode, JointCommand};
 use crate::control::transitions::{
-    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP,
-    LAUNCH_REACH_FRACTION, LAUNCH_SPEED_MPS,
+    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_MAX_DROP_M, LAUNCH_PASS_MARGIN,
+    LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP, LAUNCH_REACH_FRACTION, LAUNCH_SPEED_MPS,
 };
+use crate::estimator::GRAVITY_MPS2;
 use crate::slots::{LEG_SLOTS, OUTPUTS, SLOTS};
 
 impl Controller {
@@ -68,8 +69,10 @@ impl Controller {
     }
 
     /// Starts a launch from the measured double-support pose at rest: the torso moves forward
-    /// to [`LAUNCH_BEHIND_M`] behind the stance foot, no higher than keeps the rear leg within
-    /// [`LAUNCH_REACH_FRACTION`] of its reach, arriving at [`LAUNCH_SPEED_MPS`].
+    /// to [`LAUNCH_BEHIND_M`] behind the stance foot (less far if the rear leg would make it drop
+    /// more than [`LAUNCH_MAX_DROP_M`]), no higher than keeps the rear leg within
+    /// [`LAUNCH_REACH_FRACTION`] of its reach, arriving at [`LAUNCH_SPEED_MPS`] (more if it
+    /// ends further back: enough to pass over the stance foot, [`LAUNCH_PASS_MARGIN`]).
     pub(super) fn begin_launch(
         &mut self,
         t_s: f64,
@@ -84,14 +87,28 @@ impl Controller {
             leg_dq,
         );
         self.launch = measured.map(|m| {
-            let x = -LAUNCH_BEHIND_M;
             let reach = LAUNCH_REACH_FRACTION * self.leg_reach_m;
+            // How far forward the rear leg lets the torso go without dropping more than
+            // LAUNCH_MAX_DROP_M: after a Stop the feet stand 0.34 m apart with the torso midway;
+            // carried to LAUNCH_BEHIND_M behind the front foot it had to drop 5 cm, and the
+            // stance knee, bent 0.9 rad, could not carry the robot once the rear foot lifted
+            // (torque saturation; `runtime/tests/restart_sim.rs`).
+            let z_floor = m.pose[1] - LAUNCH_MAX_DROP_M;
+            let reach_dx = (reach * reach - z_floor * z_floor).max(0.0).sqrt();
+            let x = (-LAUNCH_BEHIND_M)
+                .min(m.other_foot_xz_m[0] + reach_dx)
+                .max(m.pose[0]);
             let dx = x - m.other_foot_xz_m[0];
             let z = m.pose[1].min((reach * reach - dx * dx).max(0.0).sqrt());
+            // Further behind the stance foot, more speed carries the torso over it (an inverted
+            // pendulum of height z passes over from x behind at speed > |x|·√(g/z)).
+            let pass_mps = LAUNCH_PASS_MARGIN * (-x).max(0.0) * (GRAVITY_MPS2 / z).sqrt();
+            let speed_mps = LAUNCH_SPEED_MPS.max(pass_mps);
             Launch {
                 start_t_s: t_s,
                 from: m.pose,
                 to: [x, z, m.pose[2]],
+                speed_mps,
                 other_foot_xz_m: m.other_foot_xz_m,
                 leg_q: *leg_q,
                 correction: [0.0; 3],
@@ -115,7 +132,7 @@ impl Controller {
         let dt = t_s - launch.start_t_s;
         let mut pose = [0.0; 3];
         let mut rate = [0.0; 3];
-        let end_rate = [LAUNCH_SPEED_MPS, 0.0, 0.0];
+        let end_rate = [launch.speed_mps, 0.0, 0.0];
         for k in 0..3 {
             (pose[k], rate[k]) = double_support::quintic(
                 launch.from[k],

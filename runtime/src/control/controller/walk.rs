@@ -4,9 +4,7 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
-use crate::control::transitions::{
-    blend_weight, BRAKE_BLEND_FROM, START_BLEND_SPAN, START_KNEE_BLEND_SPAN,
-};
+use crate::control::transitions::{blend_weight, BRAKE_BLEND_FROM, START_KNEE_BLEND_SPAN};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
 use model::robot::MAX_DOF;
 
@@ -128,7 +126,7 @@ impl Controller {
                 let span = if i == 3 {
                     START_KNEE_BLEND_SPAN
                 } else {
-                    START_BLEND_SPAN
+                    blend.span
                 };
                 let (b, db) = blend_weight(s, blend.from_phase, span, inside, rate);
                 y[i] += (1.0 - b) * blend.offset[i];

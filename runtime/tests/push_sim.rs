@@ -1,0 +1,155 @@
+//! Pushes on the torso while walking a belt at 0.25 m/s with speed control (issue #29 item 6):
+//! 0.2 s long, −20 N (backward) and +40 N (forward), starting at 10/30/50/70/90 % of a step
+//! (the step's start and end are the impacts of the same run without the push, which is
+//! bit-identical up to the push), seeds 1–5. Ride through = no trip (a step timeout included),
+//! no fall, and the robot still walking (at least 8 impacts in the 8 s after the push).
+
+use runtime::sim::faults::{Fault, FaultEvent, FaultProfile};
+use runtime::sim::run::{walk, SimWalkOptions};
+use runtime::telemetry::speed_read::read_speed;
+use runtime::Setup;
+use std::path::{Path, PathBuf};
+
+const BELT_MPS: f64 = 0.25;
+const PUSH_S: f64 = 0.2;
+const AFTER_S: f64 = 8.0;
+
+fn setup() -> Setup {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/library");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("library fixtures")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    let mut gaits: Vec<_> = files
+        .iter()
+        .map(|p| model::gait::GaitFile::load(p).expect("a library gait"))
+        .collect();
+    gaits.sort_by(|a, b| a.speed_mps.total_cmp(&b.speed_mps));
+    let origins: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
+    let mut setup = Setup::shipped()
+        .expect("shipped setup")
+        .with_library(gaits, &origins)
+        .expect("library");
+    setup.gait = setup
+        .library
+        .iter()
+        .min_by(|a, b| {
+            (a.speed_mps - BELT_MPS)
+                .abs()
+                .total_cmp(&(b.speed_mps - BELT_MPS).abs())
+        })
+        .expect("a library")
+        .clone();
+    setup
+}
+
+/// Walks with an optional push (start s, force N); returns (ridden through, impact times, what
+/// happened).
+fn run(setup: &Setup, seed: u64, end_s: f64, push: Option<(f64, f64)>) -> (bool, Vec<f64>, String) {
+    let mut options = SimWalkOptions::new(end_s);
+    options.belt_speed_mps = Some(BELT_MPS);
+    options.seed = seed;
+    let log = std::env::temp_dir().join(format!(
+        "adam-push-{seed}-{}-{:?}.mcap",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    options.log_path = Some(log.clone());
+    if let Some((at_s, force_n)) = push {
+        let mut profile = FaultProfile::none();
+        profile.events = vec![FaultEvent {
+            at_s,
+            duration_s: PUSH_S,
+            fault: Fault::Push {
+                force_x_n: force_n,
+                force_z_n: 0.0,
+            },
+        }];
+        options.faults = Some(profile);
+    }
+    let report = walk(setup, &options).expect("walk");
+    let impacts: Vec<f64> = read_speed(&log)
+        .expect("speed rows")
+        .iter()
+        .map(|r| r.t_s)
+        .collect();
+    let _ = std::fs::remove_file(&log);
+    let after = push.map_or(0.0, |(at, _)| at + PUSH_S);
+    let steps_after = impacts
+        .iter()
+        .filter(|&&t| t > after && t <= after + AFTER_S)
+        .count();
+    let ok = report.fall.is_none() && report.summary.trip.is_none() && steps_after >= 8;
+    let what = format!(
+        "fall {:?} trip {:?} impacts in {AFTER_S} s after: {steps_after}",
+        report.fall, report.summary.trip
+    );
+    (ok, impacts, what)
+}
+
+/// Pushes landing at five points of a step: how many seeds of 5 ride through, per force and
+/// point.
+fn ride_through(force_n: f64) -> Vec<(f64, u32)> {
+    let setup = setup();
+    let points = [0.1, 0.3, 0.5, 0.7, 0.9];
+    let mut passed = vec![0u32; points.len()];
+    for seed in 1..=5 {
+        let (_, impacts, _) = run(&setup, seed, 12.0, None);
+        // The first step starting after 8 s.
+        let k = impacts
+            .iter()
+            .position(|&t| t > 8.0)
+            .expect("steps after 8 s");
+        let (t0, t1) = (impacts[k], impacts[k + 1]);
+        for (i, p) in points.iter().enumerate() {
+            let at_s = t0 + p * (t1 - t0);
+            let (ok, _, what) = run(
+                &setup,
+                seed,
+                at_s + PUSH_S + AFTER_S + 0.5,
+                Some((at_s, force_n)),
+            );
+            eprintln!(
+                "{force_n:+} N at {:.0} % (t {at_s:.3} s), seed {seed}: {} {what}",
+                p * 100.0,
+                if ok { "rides through" } else { "FAILS" }
+            );
+            passed[i] += u32::from(ok);
+        }
+    }
+    points.iter().copied().zip(passed).collect()
+}
+
+/// Asserts that pushes of `force_n` ride through in at least 4 of 5 seeds at every point.
+fn assert_rides_through(force_n: f64) {
+    let table = ride_through(force_n);
+    eprintln!("{force_n:+} N: {table:?}");
+    for (point, passed) in table {
+        assert!(
+            passed >= 4,
+            "{force_n:+} N for {PUSH_S} s at {:.0} % of the step: {passed} of 5 seeds ride through",
+            point * 100.0
+        );
+    }
+}
+
+/// The largest pushes that ride through today (of −5, −7.5, −10, −20 N and +5, +7.5, +10, +20,
+/// +40 N tried, measured on this branch; seeds riding through at 10/30/50/70/90 %):
+/// −5 N [4, 5, 4, 5, 4], +7.5 N [5, 5, 5, 4, 5]; −7.5 N [1, 5, 1, 5, 0] and +10 N
+/// [3, 4, 4, 4, 4] do not.
+#[test]
+fn small_pushes_ride_through_at_five_points_of_a_step() {
+    assert_rides_through(-5.0);
+    assert_rides_through(7.5);
+}
+
+/// The issue's acceptance: −20 N and +40 N. Not met: measured [0, 0, 1, 0, 0] and
+/// [0, 0, 0, 0, 0] of 5 seeds: a backward push stalls the step until the step timeout
+/// (2.4 s) trips, a forward one pitches the robot over (or stalls it) within 2–5 steps.
+#[test]
+#[ignore = "issue #29 item 6: pushes of -20 N / +40 N for 0.2 s do not ride through yet"]
+fn issue_pushes_ride_through_at_five_points_of_a_step() {
+    assert_rides_through(-20.0);
+    assert_rides_through(40.0);
+}
