@@ -39,8 +39,8 @@ pub(crate) struct LibraryArgs {
     #[arg(long, default_value = "two-chains", value_parser = parse_schedule)]
     pub(crate) schedule: Schedule,
     /// Largest relative difference between the verified step (duration, length) and the
-    /// plan's for a gait to enter the library.
-    #[arg(long, default_value_t = planner::verify::STEP_DURATION_TOLERANCE)]
+    /// plan's for a gait to enter the library (default: the 1 % plan accuracy).
+    #[arg(long, default_value_t = planner::verify::PLAN_ACCURACY)]
     pub(crate) max_step_error: f64,
 }
 
