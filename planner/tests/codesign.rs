@@ -69,7 +69,10 @@ fn uncentred_ripopt_plan() -> planner::plan::PlannedGait {
     let cot = costed.cost_of_transport(&solved.x);
     // 0.020731: the mechanical cost of transport from |u q̇| itself (it read 0.020842 when it was
     // summed from the power slacks, which the uncentred start leaves above |u q̇|).
-    assert!((cot / 0.020731 - 1.0).abs() < 1e-4, "cost of transport {cot}");
+    assert!(
+        (cot / 0.020731 - 1.0).abs() < 1e-4,
+        "cost of transport {cot}"
+    );
     planned.x = solved.x;
     planned
 }

@@ -32,10 +32,16 @@ pub(crate) fn audit(
         }
         None => {
             let [thigh, shin] = cfg.codesign.initial_m;
-            let (model, text) = model::design::generate_model(&DesignLengths {
-                thigh_length_m: thigh,
-                shin_length_m: shin,
-            })?;
+            let (model, text) = model::design::generate_model_with(
+                &DesignLengths {
+                    thigh_length_m: thigh,
+                    shin_length_m: shin,
+                },
+                &model::design::MassModel {
+                    a1_drives: cfg.codesign.a1_drives,
+                    ..Default::default()
+                },
+            )?;
             (
                 model,
                 text,

@@ -64,10 +64,16 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
     std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let t0 = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
-    let (model, urdf) = model::design::generate_model(&DesignLengths {
-        thigh_length_m: model_lengths[0],
-        shin_length_m: model_lengths[1],
-    })?;
+    let (model, urdf) = model::design::generate_model_with(
+        &DesignLengths {
+            thigh_length_m: model_lengths[0],
+            shin_length_m: model_lengths[1],
+        },
+        &model::design::MassModel {
+            a1_drives: cfg.codesign.a1_drives,
+            ..Default::default()
+        },
+    )?;
     println!(
         "warm start: planning the gait at thigh {} m, shin {} m",
         model_lengths[0], model_lengths[1]

@@ -221,10 +221,16 @@ pub(crate) fn convergence_sweep(
     }
     let start = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
-    let (model, urdf) = model::design::generate_model(&DesignLengths {
-        thigh_length_m: model_lengths[0],
-        shin_length_m: model_lengths[1],
-    })?;
+    let (model, urdf) = model::design::generate_model_with(
+        &DesignLengths {
+            thigh_length_m: model_lengths[0],
+            shin_length_m: model_lengths[1],
+        },
+        &model::design::MassModel {
+            a1_drives: cfg.codesign.a1_drives,
+            ..Default::default()
+        },
+    )?;
     println!(
         "warm start: planning the gait at thigh {} m, shin {} m",
         model_lengths[0], model_lengths[1]

@@ -98,14 +98,15 @@ impl fmt::Display for CodesignReport<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "co-design ({} inertia coupling), {:.1} s in all",
+            "co-design ({} inertia coupling), {:.1} s in all (mech CoT: the mechanical cost of \
+             transport Σ∫|u q̇| dt / m g d, whatever [cost] minimizes)",
             coupling_name(self.inertia),
             self.wall_time_s
         )?;
         writeln!(
             f,
             "{:>5} {:>16} {:>16} {:>8} {:>6} {:>9}",
-            "outer", "start thigh/shin", "found thigh/shin", "CoT", "iter", "solve s"
+            "outer", "start thigh/shin", "found thigh/shin", "mech CoT", "iter", "solve s"
         )?;
         for (j, o) in self.outer.iter().enumerate() {
             writeln!(
@@ -124,7 +125,7 @@ impl fmt::Display for CodesignReport<'_> {
         writeln!(
             f,
             "\n{:<22} {:>8} {:>8} {:>9} {:>9} {:>9} {:>8}",
-            "design", "thigh m", "shin m", "step m", "period s", "speed m/s", "CoT"
+            "design", "thigh m", "shin m", "step m", "period s", "speed m/s", "mech CoT"
         )?;
         for row in &self.designs {
             writeln!(f, "{row}")?;
