@@ -406,8 +406,12 @@ pub struct SweepOutcome {
     /// Speed, m/s.
     pub speed_mps: f64,
     /// Cost of transport at the run's final lengths (of the co-design optimum on the
-    /// regenerated robot with exact coupling, else of the polished gait).
+    /// regenerated robot with exact coupling, else of the polished gait): the mechanical one,
+    /// Σ∫|u q̇| dt / (m g d), whatever `[cost]` minimizes.
     pub cost_of_transport: f64,
+    /// The objective `[cost]` minimizes, at the run's last solve (equal to the cost of
+    /// transport for the default mechanical cost): what ranks runs and grid points.
+    pub objective: f64,
     /// Solver iterations over the run's solves.
     pub iterations: usize,
     /// Solve time over the run's solves, s.
@@ -460,6 +464,11 @@ pub fn sweep(
                     .iter()
                     .map(|o| &o.report)
                     .chain(r.planned.stages.iter());
+                let objective = r
+                    .planned
+                    .stages
+                    .last()
+                    .map_or(g.cost_of_transport, |s| s.objective);
                 let (iterations, solve_time_s) =
                     reports.fold((0, 0.0), |(i, t), s| (i + s.iterations, t + s.solve_time_s));
                 SweepOutcome {
@@ -468,6 +477,7 @@ pub fn sweep(
                     step_duration_s: g.step_duration_s,
                     speed_mps: g.speed_mps,
                     cost_of_transport: g.cost_of_transport,
+                    objective,
                     iterations,
                     solve_time_s,
                 }
@@ -484,18 +494,19 @@ pub fn sweep(
         .collect()
 }
 
-/// Runs whose cost of transport is more than `relative` above the best run's: local minima.
+/// Runs whose objective (the cost `[cost]` minimizes) is more than `relative` above the best
+/// run's: local minima.
 pub fn local_minima(runs: &[SweepRun], relative: f64) -> Vec<bool> {
     let best = runs
         .iter()
         .filter_map(|r| r.outcome.as_ref().ok())
-        .map(|o| o.cost_of_transport)
+        .map(|o| o.objective)
         .fold(f64::INFINITY, f64::min);
     runs.iter()
         .map(|r| {
             r.outcome
                 .as_ref()
-                .is_ok_and(|o| o.cost_of_transport > best * (1.0 + relative))
+                .is_ok_and(|o| o.objective > best * (1.0 + relative))
         })
         .collect()
 }
@@ -536,6 +547,7 @@ pub fn fixed_design(
             step_duration_s: g.step_duration_s,
             speed_mps: g.speed_mps,
             cost_of_transport: g.cost_of_transport,
+            objective: report.objective,
             iterations: report.iterations,
             solve_time_s: report.solve_time_s,
         })

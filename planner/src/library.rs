@@ -303,25 +303,36 @@ pub fn plan_library(
             })
             .collect()
     };
-    let (slower, faster) = match options.schedule {
+    // Whole solves run on the workers: a pool of its own with the stack of a main thread (a
+    // solve overflowed a 2 MiB test-thread stack), as the co-design landscape does.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .stack_size(WORKER_STACK_BYTES)
+        .build()
+        .map_err(|e| PlannerError::Solver(format!("the library's thread pool: {e}")))?;
+    let (slower, faster) = pool.install(|| match options.schedule {
         Schedule::Sequential => (walk(&down), walk(&up)),
         Schedule::TwoChains => rayon::join(|| walk(&down), || walk(&up)),
-    };
+    });
     for (i, r) in slower.into_iter().chain(faster) {
         solved[i] = Some(r);
     }
     // Verify every gait (and tabulate its feed-forward), spread over the pool.
-    let outcomes: Vec<SpeedOutcome> = solved
-        .into_par_iter()
-        .zip(speeds_mps.par_iter())
-        .map(|(s, &v)| check_speed(model, v, s, options))
-        .collect();
+    let outcomes: Vec<SpeedOutcome> = pool.install(|| {
+        solved
+            .into_par_iter()
+            .zip(speeds_mps.par_iter())
+            .map(|(s, &v)| check_speed(model, v, s, options))
+            .collect()
+    });
     Ok(LibraryPlan {
         robot: robot_reference(model, urdf_ref, urdf_text),
         outcomes,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
 }
+
+/// Stack of the library's workers, bytes (a main thread's).
+const WORKER_STACK_BYTES: usize = 8 << 20;
 
 fn robot_reference(model: &PlanarModel, urdf_ref: &str, urdf_text: &str) -> RobotReference {
     RobotReference {

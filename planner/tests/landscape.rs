@@ -181,6 +181,7 @@ fn the_sweep_file_round_trips_and_bad_lengths_are_named() {
                 step_duration_s: 0.9,
                 speed_mps: 0.1667,
                 cost_of_transport: 0.01387,
+                objective: 0.01387,
                 iterations: 130,
                 solve_time_s: 1.2,
             }),

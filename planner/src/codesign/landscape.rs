@@ -80,9 +80,7 @@ impl Landscape {
 }
 
 fn cost(p: &LandscapePoint) -> f64 {
-    p.outcome
-        .as_ref()
-        .map_or(f64::INFINITY, |o| o.cost_of_transport)
+    p.outcome.as_ref().map_or(f64::INFINITY, |o| o.objective)
 }
 
 /// A solved grid point: its outcome, and its point and multipliers for a neighbour's start.
@@ -123,6 +121,7 @@ fn solve_point(
             step_duration_s: g.step_duration_s,
             speed_mps: g.speed_mps,
             cost_of_transport: g.cost_of_transport,
+            objective: report.objective,
             iterations: report.iterations,
             solve_time_s: report.solve_time_s,
         },

@@ -116,7 +116,7 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
     let costs: Vec<Option<f64>> = land
         .points
         .iter()
-        .map(|p| p.outcome.as_ref().ok().map(|o| o.cost_of_transport))
+        .map(|p| p.outcome.as_ref().ok().map(|o| o.objective))
         .collect();
     plots::landscape(
         &out_dir.join("landscape"),
@@ -124,7 +124,7 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
             thigh_m: &land.thigh_m,
             shin_m: &land.shin_m,
             cost: &costs,
-            cost_label: "cost of transport",
+            cost_label: cost_label(&cfg),
             optimum_m: Some((optimum[0], optimum[1])),
             sweep_ends_m: &ends,
         },
@@ -266,4 +266,14 @@ fn cost_table(land: &Landscape) -> String {
         s.push('\n');
     }
     s
+}
+
+/// The heat map's colour: the objective `[cost]` minimizes.
+fn cost_label(cfg: &planner::config::PlannerConfig) -> &'static str {
+    match cfg.cost.kind {
+        planner::config::CostKind::Mechanical => "mechanical cost of transport",
+        planner::config::CostKind::Electrical => "electrical cost of transport (A1)",
+        planner::config::CostKind::TorqueSquared => "torque squared per distance (N²·m·s)",
+        planner::config::CostKind::Weighted => "weighted cost",
+    }
 }

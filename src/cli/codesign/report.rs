@@ -293,7 +293,11 @@ mod tests {
         };
         let text = report(InertiaCoupling::Exact, true);
         let lines: Vec<&str> = text.lines().collect();
-        assert_eq!(lines[0], "co-design (exact inertia coupling), 4.1 s in all");
+        assert_eq!(
+            lines[0],
+            "co-design (exact inertia coupling), 4.1 s in all (mech CoT: the mechanical cost of \
+             transport Σ∫|u q̇| dt / m g d, whatever [cost] minimizes)"
+        );
         assert_eq!(
             lines[2],
             "    1  0.2400/0.2500    0.3487/0.3500    0.01411    135      2.87"
@@ -322,6 +326,7 @@ mod tests {
                     step_duration_s: 0.9,
                     speed_mps: 0.1667,
                     cost_of_transport: 0.0139,
+                    objective: 0.0139,
                     iterations: 128,
                     solve_time_s: 4.8,
                 }),
