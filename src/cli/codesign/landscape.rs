@@ -2,11 +2,10 @@
 //! design box, drawn as a heat map with the co-design optimum and the convergence study's
 //! endpoints, and the constraints that hold the co-design optimum with their multipliers.
 
-use super::{codesign_config, CodesignArgs};
+use super::{codesign_config, warm_start, CodesignArgs};
 use crate::cli::paths::{writable, OUT_DIR};
 use crate::cli::plots;
 use anyhow::{Context, Result};
-use model::design::DesignLengths;
 use planner::codesign::{Landscape, LandscapeStart};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -64,21 +63,7 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
     std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let t0 = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
-    let (model, urdf) = model::design::generate_model_with(
-        &DesignLengths {
-            thigh_length_m: model_lengths[0],
-            shin_length_m: model_lengths[1],
-        },
-        &model::design::MassModel {
-            a1_drives: cfg.codesign.a1_drives,
-            ..Default::default()
-        },
-    )?;
-    println!(
-        "warm start: planning the gait at thigh {} m, shin {} m",
-        model_lengths[0], model_lengths[1]
-    );
-    let initial = planner::plan::plan_gait(&model, "robot.urdf", &urdf, &cfg, &mut |_| {})?;
+    let initial = warm_start(&cfg)?;
     let warm_s = t0.elapsed().as_secs_f64();
     let bar = progress(n * n, "fixed-design solves")?;
     let start = match request.start {
@@ -148,8 +133,8 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
         if let Ok(o) = &best.outcome {
             writeln!(
                 md,
-                "Best grid point: thigh {:.4} m, shin {:.4} m, cost of transport {:.5} (step {:.4} m in {:.4} s).",
-                best.lengths_m[0], best.lengths_m[1], o.cost_of_transport, o.step_length_m, o.step_duration_s
+                "Best grid point: thigh {:.4} m, shin {:.4} m, objective {:.5}, mechanical cost of transport {:.5} (step {:.4} m in {:.4} s).",
+                best.lengths_m[0], best.lengths_m[1], o.objective, o.cost_of_transport, o.step_length_m, o.step_duration_s
             )?;
         }
     }

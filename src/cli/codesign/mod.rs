@@ -221,21 +221,7 @@ pub(crate) fn convergence_sweep(
     }
     let start = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
-    let (model, urdf) = model::design::generate_model_with(
-        &DesignLengths {
-            thigh_length_m: model_lengths[0],
-            shin_length_m: model_lengths[1],
-        },
-        &model::design::MassModel {
-            a1_drives: cfg.codesign.a1_drives,
-            ..Default::default()
-        },
-    )?;
-    println!(
-        "warm start: planning the gait at thigh {} m, shin {} m",
-        model_lengths[0], model_lengths[1]
-    );
-    let initial = planner::plan::plan_gait(&model, "robot.urdf", &urdf, &cfg, &mut |_| {})?;
+    let initial = warm_start(&cfg)?;
     let warm_s = start.elapsed().as_secs_f64();
     let starts = sweep_grid(&cfg, grid);
     let bar = indicatif::ProgressBar::new(starts.len() as u64);
@@ -350,4 +336,30 @@ fn refuse_gait_outputs(args: &CodesignArgs, study: &str) -> Result<()> {
 
 fn rayon_threads() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// The gait planned at `[codesign] initial_m` on the robot GenerateModel makes there (with the
+/// A1 drives if `[codesign] a1_drives`): the warm start of the sweep and the landscape.
+pub(super) fn warm_start(
+    cfg: &planner::config::PlannerConfig,
+) -> Result<planner::plan::PlannedGait> {
+    let [thigh_m, shin_m] = cfg.codesign.initial_m;
+    let (model, urdf) = model::design::generate_model_with(
+        &DesignLengths {
+            thigh_length_m: thigh_m,
+            shin_length_m: shin_m,
+        },
+        &model::design::MassModel {
+            a1_drives: cfg.codesign.a1_drives,
+            ..Default::default()
+        },
+    )?;
+    println!("warm start: planning the gait at thigh {thigh_m} m, shin {shin_m} m");
+    Ok(planner::plan::plan_gait(
+        &model,
+        "robot.urdf",
+        &urdf,
+        cfg,
+        &mut |_| {},
+    )?)
 }
