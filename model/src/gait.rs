@@ -258,27 +258,7 @@ impl GaitFile {
     /// Parses gait JSON into its schema without checking the values; errors name the line, the
     /// column and the field.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
-        // Check the version before the schema, so a file from another version gets that error.
-        let raw: serde_json::Value = serde_json::from_str(text)
-            .map_err(|e| crate::json_path::json_error(text, origin, &e))?;
-        let version = raw
-            .get("schema_version")
-            .cloned()
-            .unwrap_or(serde_json::Value::Null);
-        if version.as_u64() != Some(GAIT_SCHEMA_VERSION as u64) {
-            return Err(ModelError::InvalidField {
-                origin: origin.to_string(),
-                field: "schema_version".into(),
-                value: if version.is_null() {
-                    "(missing)".into()
-                } else {
-                    version.to_string()
-                },
-                reason: format!("this build reads gait schema version {GAIT_SCHEMA_VERSION}"),
-            });
-        }
-        // From the text, not the value, so that a type error keeps its line and column.
-        serde_json::from_str(text).map_err(|e| crate::json_path::json_error(text, origin, &e))
+        crate::json_path::parse_versioned(text, origin, "gait", GAIT_SCHEMA_VERSION)
     }
 
     /// The path of the URDF this gait names, relative to the gait file's folder.

@@ -125,6 +125,37 @@ pub(crate) fn json_error(text: &str, origin: &str, e: &serde_json::Error) -> Mod
     }
 }
 
+/// Parses `text` as a versioned file of kind `what` ("gait", "gait library"): checks its
+/// `schema_version` against `expected` before the schema, so that a file of another version
+/// gets that error and not a field error, then deserializes it from the text (a type error
+/// keeps its line and column).
+pub(crate) fn parse_versioned<T: serde::de::DeserializeOwned>(
+    text: &str,
+    origin: &str,
+    what: &str,
+    expected: u32,
+) -> crate::Result<T> {
+    let raw: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| json_error(text, origin, &e))?;
+    let version = raw
+        .get("schema_version")
+        .cloned()
+        .unwrap_or(serde_json::Value::Null);
+    if version.as_u64() != Some(u64::from(expected)) {
+        return Err(ModelError::InvalidField {
+            origin: origin.to_string(),
+            field: "schema_version".into(),
+            value: if version.is_null() {
+                "(missing)".into()
+            } else {
+                version.to_string()
+            },
+            reason: format!("this build reads {what} schema version {expected}"),
+        });
+    }
+    serde_json::from_str(text).map_err(|e| json_error(text, origin, &e))
+}
+
 #[cfg(test)]
 mod tests {
     use super::path_at;

@@ -111,28 +111,12 @@ impl GaitLibrary {
 
     /// Parses and validates library JSON; `origin` names the source in errors.
     pub fn from_json(text: &str, origin: &str) -> Result<Self> {
-        let raw: serde_json::Value = serde_json::from_str(text)
-            .map_err(|e| crate::json_path::json_error(text, origin, &e))?;
-        let version = raw
-            .get("schema_version")
-            .cloned()
-            .unwrap_or(serde_json::Value::Null);
-        if version.as_u64() != Some(LIBRARY_SCHEMA_VERSION as u64) {
-            return Err(ModelError::InvalidField {
-                origin: origin.to_string(),
-                field: "schema_version".into(),
-                value: if version.is_null() {
-                    "(missing)".into()
-                } else {
-                    version.to_string()
-                },
-                reason: format!(
-                    "this build reads gait library schema version {LIBRARY_SCHEMA_VERSION}"
-                ),
-            });
-        }
-        let library: Self = serde_json::from_str(text)
-            .map_err(|e| crate::json_path::json_error(text, origin, &e))?;
+        let library: Self = crate::json_path::parse_versioned(
+            text,
+            origin,
+            "gait library",
+            LIBRARY_SCHEMA_VERSION,
+        )?;
         library.validate(origin)?;
         Ok(library)
     }
@@ -270,37 +254,6 @@ impl GaitLibrary {
         [first, last]
     }
 
-    /// The entries around `speed_mps` (clamped to the library's range; a non-finite speed
-    /// counts as the slowest) and the weight of the upper one. Allocation-free.
-    pub fn bracket(&self, speed_mps: f64) -> SpeedBracket {
-        let [lo, hi] = self.speed_range_mps();
-        let v = if speed_mps.is_finite() {
-            speed_mps.clamp(lo, hi)
-        } else {
-            lo
-        };
-        let clamped = v != speed_mps;
-        let n = self.entries.len();
-        let upper = self
-            .entries
-            .partition_point(|e| e.speed_mps < v)
-            .min(n.saturating_sub(1));
-        let lower = if upper > 0 && self.entries[upper].speed_mps > v {
-            upper - 1
-        } else {
-            upper
-        };
-        let (a, b) = (self.entries[lower].speed_mps, self.entries[upper].speed_mps);
-        let weight = if b > a { (v - a) / (b - a) } else { 0.0 };
-        SpeedBracket {
-            lower,
-            upper,
-            weight,
-            speed_mps: v,
-            clamped,
-        }
-    }
-
     /// The path of the URDF this library names, relative to the library file's folder.
     pub fn urdf_path(&self, library_path: &Path) -> PathBuf {
         library_path
@@ -354,6 +307,35 @@ impl GaitLibrary {
     }
 }
 
+/// The entries of `speeds_mps` (sorted, not empty) around `speed_mps` (clamped to their range;
+/// a non-finite speed counts as the slowest) and the weight of the upper one: what the runtime
+/// interpolates a library gait from. Allocation-free.
+pub fn bracket(speeds_mps: &[f64], speed_mps: f64) -> SpeedBracket {
+    let n = speeds_mps.len();
+    let (lo, hi) = (speeds_mps[0], speeds_mps[n - 1]);
+    let v = if speed_mps.is_finite() {
+        speed_mps.clamp(lo, hi)
+    } else {
+        lo
+    };
+    let clamped = v != speed_mps;
+    let upper = speeds_mps.partition_point(|&s| s < v).min(n - 1);
+    let lower = if upper > 0 && speeds_mps[upper] > v {
+        upper - 1
+    } else {
+        upper
+    };
+    let (a, b) = (speeds_mps[lower], speeds_mps[upper]);
+    let weight = if b > a { (v - a) / (b - a) } else { 0.0 };
+    SpeedBracket {
+        lower,
+        upper,
+        weight,
+        speed_mps: v,
+        clamped,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -391,17 +373,19 @@ mod tests {
     #[test]
     fn a_speed_falls_between_its_two_neighbours_with_the_right_weight() {
         let lib = library(&[0.15, 0.2, 0.25]);
-        let b = lib.bracket(0.1625);
+        let speeds: Vec<f64> = lib.entries.iter().map(|e| e.speed_mps).collect();
+        let bracket = |v| bracket(&speeds, v);
+        let b = bracket(0.1625);
         assert_eq!((b.lower, b.upper, b.clamped), (0, 1, false));
         assert!((b.weight - 0.25).abs() < 1e-12, "{b:?}");
-        let on = lib.bracket(0.2);
+        let on = bracket(0.2);
         assert_eq!((on.lower, on.upper, on.weight), (1, 1, 0.0));
-        let fast = lib.bracket(0.4);
+        let fast = bracket(0.4);
         assert_eq!((fast.lower, fast.upper, fast.speed_mps), (2, 2, 0.25));
         assert!(fast.clamped);
-        let slow = lib.bracket(0.01);
+        let slow = bracket(0.01);
         assert_eq!((slow.lower, slow.upper, slow.speed_mps), (0, 0, 0.15));
-        assert!(slow.clamped && lib.bracket(f64::NAN).clamped);
+        assert!(slow.clamped && bracket(f64::NAN).clamped);
         assert_eq!(lib.speed_range_mps(), [0.15, 0.25]);
     }
 

@@ -202,22 +202,10 @@ impl SpeedLibrary {
     /// Writes the gait of speed `speed_mps` (clamped to the range) into `gait` and its braking
     /// step into `lunge`: linear interpolation between the two neighbours. Allocation-free.
     pub(super) fn blend_into(&self, speed_mps: f64, gait: &mut GaitTable, lunge: &mut Lunge) {
-        let (lo, hi) = self.range_mps();
-        let v = if speed_mps.is_finite() {
-            speed_mps.clamp(lo, hi)
-        } else {
-            lo
-        };
-        let n = self.speeds_mps.len();
-        // The segment [i, i + 1] holding v.
-        let mut i = 0;
-        while i + 2 < n && v > self.speeds_mps[i + 1] {
-            i += 1;
-        }
-        let (va, vb) = (self.speeds_mps[i], self.speeds_mps[i + 1]);
-        let w = ((v - va) / (vb - va)).clamp(0.0, 1.0);
-        lerp_table(&self.tables[i], &self.tables[i + 1], w, gait);
-        let (la, lb) = (&self.lunges[i], &self.lunges[i + 1]);
+        let b = model::library::bracket(&self.speeds_mps, speed_mps);
+        let (i, j, w) = (b.lower, b.upper, b.weight);
+        lerp_table(&self.tables[i], &self.tables[j], w, gait);
+        let (la, lb) = (&self.lunges[i], &self.lunges[j]);
         for k in 0..OUTPUTS {
             lunge.dy_end[k] = lerp(la.dy_end[k], lb.dy_end[k], w);
         }
