@@ -3,6 +3,7 @@
 
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
+use runtime::telemetry::speed_read::SpeedRow;
 use std::path::Path;
 use std::sync::Once;
 
@@ -368,61 +369,23 @@ where
 /// `adam plot speed`: speeds (belt, commanded, measured per step, library gait) over position
 /// on the belt (estimated, and true where the simulator logged it) against time, as
 /// `<prefix>.png` and `<prefix>.svg`.
-pub fn speed(
-    prefix: &Path,
-    rows: &[runtime::telemetry::speed_read::SpeedRow],
-    source: &str,
-) -> Result<()> {
+pub fn speed(prefix: &Path, rows: &[SpeedRow], source: &str) -> Result<()> {
     png_and_svg!(prefix, (1000, 800), draw_speed(rows, source))
 }
 
 fn draw_speed<DB: DrawingBackend>(
     root: &DrawingArea<DB, plotters::coord::Shift>,
-    rows: &[runtime::telemetry::speed_read::SpeedRow],
+    rows: &[SpeedRow],
     source: &str,
 ) -> Result<()>
 where
     DB::ErrorType: 'static,
 {
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e}");
-    root.fill(&WHITE).map_err(err)?;
+    root.fill(&WHITE).map_err(|e| anyhow!("drawing: {e}"))?;
     let (top, bottom) = root.split_vertically(420);
     let t0 = rows.first().map_or(0.0, |r| r.t_s).min(0.0);
     let t1 = rows.last().map_or(1.0, |r| r.t_s).max(t0 + 1.0);
-    let finite = |v: f64| v.is_finite().then_some(v);
-    let speeds = rows.iter().flat_map(|r| {
-        [r.belt_mps, r.commanded_mps, r.step_speed_mps, r.library_mps]
-            .into_iter()
-            .filter_map(finite)
-    });
-    let (lo, hi) = speeds.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
-    let (lo, hi) = if lo.is_finite() {
-        (lo - 0.02, hi + 0.02)
-    } else {
-        (0.0, 0.5)
-    };
-    let mut chart = ChartBuilder::on(&top)
-        .caption(
-            format!("Treadmill speed control: {source}"),
-            ("sans-serif", 22),
-        )
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(t0..t1, lo..hi)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("time (s)")
-        .y_desc("speed (m/s)")
-        .label_style(("sans-serif", 15))
-        .axis_desc_style(("sans-serif", 17))
-        .draw()
-        .map_err(err)?;
-    type Pick = fn(&runtime::telemetry::speed_read::SpeedRow) -> f64;
-    let series: [(&str, RGBColor, Pick); 4] = [
+    let speeds: [(&str, RGBColor, SpeedPick); 4] = [
         ("belt (set)", RGBColor(0, 0, 0), |r| r.belt_mps),
         ("commanded", RGBColor(31, 119, 180), |r| r.commanded_mps),
         ("measured step speed", RGBColor(214, 39, 40), |r| {
@@ -432,54 +395,90 @@ where
             r.library_mps
         }),
     ];
-    for (label, color, pick) in series {
-        let points: Vec<(f64, f64)> = rows
-            .iter()
-            .filter_map(|r| finite(pick(r)).map(|v| (r.t_s, v)))
-            .collect();
-        chart
-            .draw_series(LineSeries::new(points, color.stroke_width(2)))
-            .map_err(err)?
-            .label(label)
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2)));
-    }
-    chart
-        .configure_series_labels()
-        .label_font(("sans-serif", 14))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
-    let positions = rows.iter().flat_map(|r| {
-        [r.position_m, r.true_position_m]
-            .into_iter()
-            .filter_map(finite)
-    });
-    let extent = positions.fold(0.1_f64, |a, v| a.max(v.abs())) + 0.02;
-    let mut chart = ChartBuilder::on(&bottom)
-        .margin(15)
-        .x_label_area_size(40)
-        .y_label_area_size(60)
-        .build_cartesian_2d(t0..t1, -extent..extent)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .x_desc("time (s)")
-        .y_desc("position on the belt (m, + forward)")
-        .label_style(("sans-serif", 15))
-        .axis_desc_style(("sans-serif", 17))
-        .draw()
-        .map_err(err)?;
-    let series: [(&str, RGBColor, Pick); 2] = [
+    let (lo, hi) = finite_values(rows, &speeds)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    let (lo, hi) = if lo.is_finite() {
+        (lo - 0.02, hi + 0.02)
+    } else {
+        (0.0, 0.5)
+    };
+    speed_panel(
+        &top,
+        Some(format!("Treadmill speed control: {source}")),
+        (t0..t1, lo..hi),
+        "speed (m/s)",
+        &speeds,
+        rows,
+    )?;
+    let positions: [(&str, RGBColor, SpeedPick); 2] = [
         ("estimated (leg odometry)", RGBColor(31, 119, 180), |r| {
             r.position_m
         }),
         ("true (simulator)", RGBColor(0, 0, 0), |r| r.true_position_m),
     ];
-    for (label, color, pick) in series {
+    let extent = finite_values(rows, &positions).fold(0.1_f64, |a, v| a.max(v.abs())) + 0.02;
+    speed_panel(
+        &bottom,
+        None,
+        (t0..t1, -extent..extent),
+        "position on the belt (m, + forward)",
+        &positions,
+        rows,
+    )
+}
+
+/// One `/speed` field of a row.
+type SpeedPick = fn(&SpeedRow) -> f64;
+
+/// The finite values of `series` over `rows`.
+fn finite_values<'a>(
+    rows: &'a [SpeedRow],
+    series: &'a [(&str, RGBColor, SpeedPick)],
+) -> impl Iterator<Item = f64> + 'a {
+    rows.iter()
+        .flat_map(move |r| series.iter().map(move |s| (s.2)(r)))
+        .filter(|v| v.is_finite())
+}
+
+/// One panel of `adam plot speed`: `series` (label, colour, field) against time, a line each
+/// through its finite values (a series with none is left out of the legend).
+fn speed_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    caption: Option<String>,
+    (t, y): (std::ops::Range<f64>, std::ops::Range<f64>),
+    y_desc: &str,
+    series: &[(&str, RGBColor, SpeedPick)],
+    rows: &[SpeedRow],
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow!("drawing: {e}");
+    let mut builder = ChartBuilder::on(area);
+    if let Some(caption) = caption {
+        builder.caption(caption, ("sans-serif", 22));
+    }
+    let mut chart = builder
+        .margin(15)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(t, y)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc(y_desc)
+        .label_style(("sans-serif", 15))
+        .axis_desc_style(("sans-serif", 17))
+        .draw()
+        .map_err(err)?;
+    for &(label, color, pick) in series {
         let points: Vec<(f64, f64)> = rows
             .iter()
-            .filter_map(|r| finite(pick(r)).map(|v| (r.t_s, v)))
+            .map(|r| (r.t_s, pick(r)))
+            .filter(|p| p.1.is_finite())
             .collect();
         if points.is_empty() {
             continue;
