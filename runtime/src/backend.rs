@@ -20,8 +20,8 @@ pub trait Backend: MotorBus + Imu {
         None
     }
 
-    /// The robot's true position along the treadmill's belt (+ forward of where it started),
-    /// m, where the backend knows it (a simulator); `None` on hardware. Logged beside the
+    /// The robot's true position along the treadmill's belt (+ forward of the belt's centre,
+    /// where a simulated run starts), m, where the backend knows it (a simulator); `None` on hardware. Logged beside the
     /// speed control's estimate, never used by the controller.
     fn true_belt_position_m(&self) -> Option<f64> {
         None

@@ -236,4 +236,23 @@ impl Setup {
         self.controller(false)?;
         Ok(self)
     }
+
+    /// The library gait whose speed is nearest `speed_mps` (`None` without a library).
+    pub fn library_gait_nearest(&self, speed_mps: f64) -> Option<&model::gait::GaitFile> {
+        self.library.iter().min_by(|a, b| {
+            (a.speed_mps - speed_mps)
+                .abs()
+                .total_cmp(&(b.speed_mps - speed_mps).abs())
+        })
+    }
+
+    /// This setup walking from the library gait nearest `speed_mps` (unchanged without a
+    /// library): a simulated walk on a belt at that speed starts in that gait's state, so speed
+    /// control does not have to pull a mismatched first step onto the belt.
+    pub fn starting_near(mut self, speed_mps: f64) -> Self {
+        if let Some(g) = self.library_gait_nearest(speed_mps) {
+            self.gait = g.clone();
+        }
+        self
+    }
 }

@@ -468,8 +468,6 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
             });
         }
     }
-    // The true position on the belt is logged relative to where the run starts.
-    let belt_x0_m = backend.true_belt_position_m();
     let t0 = clock.now_s();
     let mut deadline = t0;
     let mut ran = 0u64;
@@ -569,10 +567,7 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
                 tx.push(LogRecord::Speed {
                     t_s: t,
                     speed: status.speed,
-                    true_position_m: backend
-                        .true_belt_position_m()
-                        .zip(belt_x0_m)
-                        .map(|(x, x0)| x - x0),
+                    true_position_m: backend.true_belt_position_m(),
                 });
             }
             if let (true, Some(trip)) = (status.new_trip, status.trip) {

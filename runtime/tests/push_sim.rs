@@ -8,40 +8,15 @@ use runtime::sim::faults::{Fault, FaultEvent, FaultProfile};
 use runtime::sim::run::{walk, SimWalkOptions};
 use runtime::telemetry::speed_read::read_speed;
 use runtime::Setup;
-use std::path::{Path, PathBuf};
+
+mod common;
 
 const BELT_MPS: f64 = 0.25;
 const PUSH_S: f64 = 0.2;
 const AFTER_S: f64 = 8.0;
 
 fn setup() -> Setup {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/library");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("library fixtures")
-        .map(|e| e.expect("entry").path())
-        .collect();
-    files.sort();
-    let mut gaits: Vec<_> = files
-        .iter()
-        .map(|p| model::gait::GaitFile::load(p).expect("a library gait"))
-        .collect();
-    gaits.sort_by(|a, b| a.speed_mps.total_cmp(&b.speed_mps));
-    let origins: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
-    let mut setup = Setup::shipped()
-        .expect("shipped setup")
-        .with_library(gaits, &origins)
-        .expect("library");
-    setup.gait = setup
-        .library
-        .iter()
-        .min_by(|a, b| {
-            (a.speed_mps - BELT_MPS)
-                .abs()
-                .total_cmp(&(b.speed_mps - BELT_MPS).abs())
-        })
-        .expect("a library")
-        .clone();
-    setup
+    common::library_setup().starting_near(BELT_MPS)
 }
 
 /// Walks with an optional push (start s, force N); returns (ridden through, impact times, what

@@ -9,39 +9,11 @@ use runtime::telemetry::speed_read::{read_speed, SpeedRow};
 use runtime::Setup;
 use std::path::{Path, PathBuf};
 
-/// The shipped setup with the test library.
-fn setup() -> Setup {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/library");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("library fixtures")
-        .map(|e| e.expect("entry").path())
-        .collect();
-    files.sort();
-    let mut gaits: Vec<_> = files
-        .iter()
-        .map(|p| model::gait::GaitFile::load(p).expect("a library gait"))
-        .collect();
-    gaits.sort_by(|a, b| a.speed_mps.total_cmp(&b.speed_mps));
-    let origins: Vec<String> = files.iter().map(|p| p.display().to_string()).collect();
-    let setup = Setup::shipped().expect("shipped setup");
-    setup.with_library(gaits, &origins).expect("library")
-}
+mod common;
 
-/// [`setup`] starting on the library gait nearest `belt_mps`.
+/// The shipped setup with the test library, starting on the library gait nearest `belt_mps`.
 fn setup_at(belt_mps: f64) -> Setup {
-    let mut setup = setup();
-    let nearest = setup
-        .library
-        .iter()
-        .min_by(|a, b| {
-            (a.speed_mps - belt_mps)
-                .abs()
-                .total_cmp(&(b.speed_mps - belt_mps).abs())
-        })
-        .expect("a library")
-        .clone();
-    setup.gait = nearest;
-    setup
+    common::library_setup().starting_near(belt_mps)
 }
 
 fn temp_log(tag: &str) -> PathBuf {
@@ -183,7 +155,7 @@ fn write_library_file(dir: &Path, robot_name: &str) -> PathBuf {
         (0.8460, 0.2599, 0.7933),
         (0.8266, 0.2798, 0.7905),
     ];
-    let setup = setup();
+    let setup = common::library_setup();
     let mut robot = setup.gait.robot.clone();
     robot.name = robot_name.to_string();
     robot.urdf = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -230,7 +202,7 @@ fn the_config_names_a_library_file_and_one_of_another_robot_is_refused() {
     let config_text =
         std::fs::read_to_string(root.join("configs/runtime/adam.toml")).expect("config");
     let gait = root.join(runtime::DEFAULT_GAIT);
-    let robot = setup().gait.robot.name.clone();
+    let robot = common::library_setup().gait.robot.name.clone();
     let good = write_library_file(&dir, &robot);
     let config = dir.join("runtime.toml");
     let with_library = |library: &Path| {

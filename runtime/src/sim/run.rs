@@ -130,9 +130,9 @@ impl Backend for SimBus<RobotSim> {
     fn true_pitch_rad(&self) -> Option<f64> {
         Some(self.plant().torso_pitch_rad())
     }
-    /// The hip's world x on the treadmill (the loop logs it relative to its first value).
+    /// The hip's position on the belt, forward of its centre (where the robot starts).
     fn true_belt_position_m(&self) -> Option<f64> {
-        Some(self.plant().base_position_m()[0])
+        Some(self.plant().position_on_belt_m())
     }
 }
 
@@ -240,6 +240,19 @@ pub fn walk_with_operator(
     options: &SimWalkOptions,
     operator: Option<crate::operator::OperatorReceiver>,
 ) -> Result<SimWalkReport> {
+    // With speed control, start on the library gait nearest the belt's first speed.
+    let first_belt_mps = match &options.belt_profile {
+        Some(profile) => Some(profile.initial_speed_mps()),
+        None => options.belt_speed_mps,
+    };
+    let near;
+    let setup = match first_belt_mps {
+        Some(v) if !setup.library.is_empty() => {
+            near = setup.clone().starting_near(v);
+            &near
+        }
+        _ => setup,
+    };
     let bus = sim_backend(setup, options)?;
     let belt_speed_mps = bus.plant().belt_speed_mps();
     let x0_m = bus.plant().base_position_m()[0];
