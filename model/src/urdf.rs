@@ -165,13 +165,7 @@ fn scan(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
         origin: origin.to_string(),
         message: e,
     };
-    let line_at = |pos: u64| {
-        text.as_bytes()[..(pos as usize).min(text.len())]
-            .iter()
-            .filter(|b| **b == b'\n')
-            .count()
-            + 1
-    };
+    let line_at = |pos: u64| line_at(text, pos);
     loop {
         let pos = reader.buffer_position();
         let event = reader.read_event().map_err(|e| syntax(e.to_string()))?;
@@ -291,19 +285,22 @@ fn scan(text: &str, origin: &str) -> Result<HashMap<String, bool>> {
     Ok(out)
 }
 
+/// The 1-based line of byte `pos` of `text` (what URDF errors name).
+fn line_at(text: &str, pos: u64) -> usize {
+    text.as_bytes()[..(pos as usize).min(text.len())]
+        .iter()
+        .filter(|b| **b == b'\n')
+        .count()
+        + 1
+}
+
 /// The `<transmission>` elements: for each joint they name, its drive (gear ratio and motor
 /// constants; damping comes from `<dynamics>`) and the transmission as errors name it.
 fn scan_transmissions(text: &str, origin: &str) -> Result<HashMap<String, (JointDrive, String)>> {
     use quick_xml::events::Event;
     let mut reader = quick_xml::Reader::from_str(text);
     let mut out: HashMap<String, (JointDrive, String)> = HashMap::new();
-    let line_at = |pos: u64| {
-        text.as_bytes()[..(pos as usize).min(text.len())]
-            .iter()
-            .filter(|b| **b == b'\n')
-            .count()
-            + 1
-    };
+    let line_at = |pos: u64| line_at(text, pos);
     let syntax = |e: String| ModelError::UrdfSyntax {
         origin: origin.to_string(),
         message: e,
