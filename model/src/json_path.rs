@@ -156,6 +156,21 @@ pub(crate) fn parse_versioned<T: serde::de::DeserializeOwned>(
     serde_json::from_str(text).map_err(|e| json_error(text, origin, &e))
 }
 
+/// Writes `value` to `path` as pretty JSON with a final newline (a validated gait or library).
+pub(crate) fn write_pretty<T: serde::Serialize>(
+    path: &std::path::Path,
+    value: &T,
+) -> crate::Result<()> {
+    let text = serde_json::to_string_pretty(value).map_err(|e| ModelError::Parse {
+        origin: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    std::fs::write(path, text + "\n").map_err(|error| ModelError::Io {
+        path: path.to_path_buf(),
+        error,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::path_at;

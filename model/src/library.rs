@@ -125,14 +125,7 @@ impl GaitLibrary {
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let path = path.as_ref();
         self.validate(&path.display().to_string())?;
-        let text = serde_json::to_string_pretty(self).map_err(|e| ModelError::Parse {
-            origin: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        std::fs::write(path, text + "\n").map_err(|error| ModelError::Io {
-            path: path.to_path_buf(),
-            error,
-        })
+        crate::json_path::write_pretty(path, self)
     }
 
     /// Rejects an unknown version, an empty library, speeds that are not finite, positive and
