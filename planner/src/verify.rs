@@ -5,8 +5,11 @@
 //! Poincaré map P (post-impact state → next post-impact state).
 //!
 //! - y = y^a − y^d(τ(q), α): the gait's outputs and Bézier coefficients, τ the state-based phase.
-//! - ÿ is affine in u under the pinned-stance dynamics: ÿ = L_f² y + A u; both are computed
-//!   exactly from the model's constrained dynamics (one solve with u = 0 and one per actuator).
+//! - The pinned-stance dynamics in reduced coordinates: q̈ = G q̈_r + c keeps the stance foot
+//!   still and the design joints rigid, and M_r q̈_r + h_r = B_r u with M_r = GᵀDG (a Cholesky
+//!   factor of nq × nq), h_r = Gᵀ(H + Dc): the model's constrained dynamics on their solution
+//!   set, without eliminating the whole KKT system ([`ClosedLoop`]'s tests compare the two).
+//! - ÿ is affine in u: ÿ = L_f² y + A u, from q̈_r at u = 0 and per unit torque.
 //! - Integration: classic RK4 with a fixed step ([`DEFAULT_DT_S`]); the impact time inside the
 //!   step that crosses the guard is found by regula falsi (Illinois) to 1e-12 s.
 //! - The fixed point: chord iterations from the planned post-impact state with the Jacobian
@@ -35,6 +38,8 @@ use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 
 mod report;
+#[cfg(test)]
+mod tests;
 
 use report::{below, joint_distance};
 pub use report::{
@@ -158,8 +163,29 @@ pub struct Step {
     pub impact_height_m: f64,
 }
 
-/// The outputs y, ẏ and ÿ, one entry per output.
-type Outputs = (Vec<f64>, Vec<f64>, Vec<f64>);
+/// The closed-loop vector field at one state.
+struct Field {
+    /// (q̇_r, q̈_r).
+    f: Vec<f64>,
+    /// The torque of each actuator, N·m.
+    u: Vec<f64>,
+    /// The outputs y, rad.
+    y: Vec<f64>,
+}
+
+/// The pinned-stance dynamics at one reduced state ([`ClosedLoop::pinned`]).
+struct Pinned {
+    /// q̈ = G q̈_r + c: G (dof × nq).
+    g: DMatrix<f64>,
+    /// c, the full q̈ at q̈_r = 0.
+    c: DVector<f64>,
+    /// a₀ = −M_r⁻¹ h_r: q̈_r without torque.
+    drift_acceleration: DVector<f64>,
+    /// M_r⁻¹ (nq × nq): its column i is q̈_r per unit generalized force on reduced coordinate i.
+    inverse: DMatrix<f64>,
+    /// The body states at the full (q, q̇).
+    st: model::kinematics::BodyStates<f64>,
+}
 
 impl ClosedLoop {
     /// Builds the closed loop of `gait` on `model`.
@@ -196,14 +222,10 @@ impl ClosedLoop {
         self
     }
 
-    /// Phase τ of a full configuration.
+    /// Phase τ and its rate τ̇ at the reduced state (q_r, q̇_r).
     fn phase(&self, qr: &[f64], dqr: &[f64]) -> Result<(f64, f64)> {
-        let bp = &self.biped;
-        let nq = self.nq();
-        let [q, dq, ddq] = bp.full_state(qr, dqr, &vec![0.0; nq])?;
-        let th = bp
-            .model
-            .stance_leg_angle_derivatives(&q, &dq, &ddq, &bp.legs, bp.stance)?;
+        let p = self.pinned(qr, dqr)?;
+        let th = self.stance_angle(&p, &p.c)?;
         let span = self.theta_minus - self.theta_plus;
         Ok(((th.theta - self.theta_plus) / span, th.rate / span))
     }
@@ -217,7 +239,7 @@ impl ClosedLoop {
         let mut table = Vec::new();
         let mut t = 0.0;
         while t < 5.0 {
-            let (f, u) = self.field(&x)?;
+            let field = self.field(&x)?;
             let (tau, _) = self.phase(&x[..nq], &x[nq..])?;
             let by_output: Vec<f64> = self
                 .biped
@@ -228,7 +250,7 @@ impl ClosedLoop {
                         .actuators
                         .iter()
                         .position(|&a| a == c)
-                        .map_or(0.0, |k| u[k])
+                        .map_or(0.0, |k| field.u[k])
                 })
                 .collect();
             if table
@@ -237,7 +259,7 @@ impl ClosedLoop {
             {
                 table.push((tau, by_output));
             }
-            let next = self.rk4_from(&x, &f, dt)?;
+            let next = self.rk4_from(&x, &field.f, dt)?;
             if t > 0.1 && self.swing_foot(&next)?[1] < 0.0 {
                 break;
             }
@@ -251,150 +273,167 @@ impl ClosedLoop {
         self.biped.nq()
     }
 
-    /// Joint accelerations q̈_r for torques u (pinned stance, design rigid).
-    fn accelerations(&self, q: &[f64], dq: &[f64], u: &[f64]) -> Result<Vec<f64>> {
-        Ok(self.accelerations_for(q, dq, &[u])?.remove(0))
-    }
-
-    /// [`Self::accelerations`] for several torque vectors at one state.
-    fn accelerations_for(&self, q: &[f64], dq: &[f64], inputs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
+    /// The pinned-stance dynamics at (q_r, q̇_r) in reduced coordinates: the full state, the
+    /// affine map q̈ = G q̈_r + c that keeps the stance foot still and the design joints rigid,
+    /// and M_r q̈_r + h_r = B_r u with M_r = GᵀDG, h_r = Gᵀ(H + Dc) (the model's D and H).
+    /// Since the contact and design constraints' rows A satisfy AG = 0, Gᵀ removes their
+    /// forces: this is the constrained dynamics [D −Aᵀ; A 0] restricted to its solution set,
+    /// solved by a Cholesky factor of the nq × nq M_r instead of an elimination of the full
+    /// (dof + constraints)-square system. B_r selects the actuated reduced coordinates.
+    fn pinned(&self, qr: &[f64], dqr: &[f64]) -> Result<Pinned> {
         let bp = &self.biped;
-        let stance_foot = bp.legs.side(bp.stance).foot;
-        let all = bp
-            .model
-            .constrained_accelerations(q, dq, inputs, &[stance_foot])?;
-        Ok(all
-            .iter()
-            .map(|ddq| bp.reduced.iter().map(|&c| ddq[c]).collect())
-            .collect())
-    }
-
-    /// Outputs y, ẏ and ÿ for reduced accelerations `ddqr`.
-    fn outputs(&self, qr: &[f64], dqr: &[f64], ddqr: &[f64]) -> Result<Outputs> {
-        Ok(self.outputs_for(qr, dqr, &[ddqr])?.remove(0))
-    }
-
-    /// [`Self::outputs`] for several reduced accelerations at one state, from one pass of
-    /// the kinematics for the full state and one for the stance-leg angle (each result bit
-    /// for bit its own `outputs`).
-    fn outputs_for(&self, qr: &[f64], dqr: &[f64], ddqrs: &[&[f64]]) -> Result<Vec<Outputs>> {
-        let bp = &self.biped;
-        let ([q, dq], ddqs) = bp.full_states(qr, dqr, ddqrs)?;
-        let mut st = model::kinematics::BodyStates::zeroed();
-        bp.model.body_states_into(&q, &dq, &mut st)?;
-        let span = self.theta_minus - self.theta_plus;
-        let m = self.alpha.len();
-        ddqrs
-            .iter()
-            .zip(&ddqs)
-            .map(|(ddqr, ddq)| {
-                let th = bp
-                    .model
-                    .stance_leg_angle_derivatives_in(&st, ddq, &bp.legs, bp.stance)?;
-                let tau = (th.theta - self.theta_plus) / span;
-                let (td, tdd) = (th.rate / span, th.accel / span);
-                let (mut y, mut dy, mut ddy) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
-                for o in 0..m {
-                    let (b0, b1, b2) = bezier::eval_all(&self.alpha[o], tau);
-                    let j = bp.output_coords[o];
-                    y[o] = qr[j] - b0;
-                    dy[o] = dqr[j] - b1 * td;
-                    ddy[o] = ddqr[j] - b2 * td * td - b1 * tdd;
-                }
-                Ok((y, dy, ddy))
-            })
-            .collect()
-    }
-
-    /// The closed-loop vector field: (q̇_r, q̈_r) and the torque used.
-    fn field(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
         let nq = self.nq();
-        let nu = self.biped.nu();
-        let (qr, dqr) = (&x[..nq], &x[nq..]);
-        let [q, dq, _] = self.biped.full_state(qr, dqr, &vec![0.0; nq])?;
-        if let Law::JointPd {
-            kp_nm_per_rad,
-            kd_nm_s_per_rad,
-            feedforward,
-            reference_delay_s,
-        } = &self.law
-        {
-            let (mut y, mut dy, _) = self.outputs(qr, dqr, &vec![0.0; nq])?;
-            let (mut tau, tau_rate) = self.phase(qr, dqr)?;
-            if *reference_delay_s > 0.0 {
-                tau -= tau_rate * reference_delay_s;
-                for (o, (yo, dyo)) in y.iter_mut().zip(dy.iter_mut()).enumerate() {
-                    let (b0, b1, _) = bezier::eval_all(&self.alpha[o], tau);
-                    let j = self.biped.output_coords[o];
-                    *yo = qr[j] - b0;
-                    *dyo = dqr[j] - b1 * tau_rate;
-                }
-            }
-            let mut ff = vec![0.0; y.len()];
-            let knots: Vec<f64> = feedforward.iter().map(|(t, _)| *t).collect();
-            let rows: Vec<&[f64]> = feedforward.iter().map(|(_, u)| u.as_slice()).collect();
-            model::gait::interpolate(&knots, &rows, tau, &mut ff);
-            let mut u = vec![0.0; nu];
-            for (k, &a) in self.biped.actuators.iter().enumerate() {
-                if let Some(o) = self.biped.output_coords.iter().position(|&c| c == a) {
-                    u[k] = -kp_nm_per_rad * y[o] - kd_nm_s_per_rad * dy[o] + ff[o];
-                }
-            }
-            let ddq = self.accelerations(&q, &dq, &u)?;
-            let mut f = dqr.to_vec();
-            f.extend(ddq);
-            return Ok((f, u));
+        let mut accelerations = vec![vec![0.0; nq]; nq + 1];
+        for (i, a) in accelerations.iter_mut().skip(1).enumerate() {
+            a[i] = 1.0;
         }
-        // The accelerations for u = 0 and for each unit torque, from one dynamics pass and one
-        // elimination (each bit for bit its own constrained-dynamics solve).
-        let mut inputs = vec![vec![0.0; nu]; nu + 1];
-        for k in 0..nu {
-            inputs[k + 1][k] = 1.0;
-        }
-        let inputs: Vec<&[f64]> = inputs.iter().map(Vec::as_slice).collect();
-        let all = self.accelerations_for(&q, &dq, &inputs)?;
-        let slices: Vec<&[f64]> = all.iter().map(Vec::as_slice).collect();
-        let mut outputs = self.outputs_for(qr, dqr, &slices)?.into_iter();
-        let (y, dy, ddy0) = outputs.next().unwrap_or_default();
-        let mut accelerations = all.into_iter();
-        let a0 = accelerations.next().unwrap_or_default();
-        let m = y.len();
-        let mut big_a = DMatrix::zeros(m, nu);
-        let mut cols = Vec::with_capacity(nu);
-        for (k, (ak, (_, _, ddyk))) in accelerations.zip(outputs).enumerate() {
-            let col: Vec<f64> = ak.iter().zip(&a0).map(|(a, b)| a - b).collect();
-            for o in 0..m {
-                big_a[(o, k)] = ddyk[o] - ddy0[o];
-            }
-            cols.push(col);
-        }
-        let eps = self.options.epsilon_per_s;
-        let rhs = DVector::from_iterator(
-            m,
-            (0..m).map(|o| -(ddy0[o] + 2.0 * eps * dy[o] + eps * eps * y[o])),
-        );
-        let u = big_a.clone().lu().solve(&rhs).ok_or_else(|| {
+        let inputs: Vec<&[f64]> = accelerations.iter().map(Vec::as_slice).collect();
+        let ([q, dq], ddqs) = bp.full_states(qr, dqr, &inputs)?;
+        let n = q.len();
+        let c = DVector::from_column_slice(&ddqs[0]);
+        let g = DMatrix::from_fn(n, nq, |r, i| ddqs[i + 1][r] - ddqs[0][r]);
+        let dy = bp.model.dynamics(&q, &dq)?;
+        let dg = &dy.mass_matrix * &g;
+        let m_r = g.transpose() * &dg;
+        let h_r = g.transpose() * (&dy.drift + &dy.mass_matrix * &c);
+        let chol = m_r.cholesky().ok_or_else(|| {
             PlannerError::Solver(format!(
-                "decoupling matrix A is singular at q = [{}] (reduced coordinates): {big_a}",
+                "the pinned-stance mass matrix is not positive definite at q = [{}] (reduced \
+                 coordinates)",
                 qr.iter()
                     .map(|v| format!("{v:.4}"))
                     .collect::<Vec<_>>()
                     .join(", ")
             ))
         })?;
-        let mut ddq = a0;
-        for k in 0..nu {
-            for i in 0..nq {
-                ddq[i] += cols[k][i] * u[k];
-            }
+        let drift_acceleration = chol.solve(&(-h_r));
+        let inverse = chol.inverse();
+        let mut st = model::kinematics::BodyStates::zeroed();
+        bp.model.body_states_into(&q, &dq, &mut st)?;
+        Ok(Pinned {
+            g,
+            c,
+            drift_acceleration,
+            inverse,
+            st,
+        })
+    }
+
+    /// The stance-leg angle and its derivatives for full accelerations `ddq`.
+    fn stance_angle(
+        &self,
+        p: &Pinned,
+        ddq: &DVector<f64>,
+    ) -> Result<model::phase::AngleDerivatives<f64>> {
+        let bp = &self.biped;
+        Ok(bp
+            .model
+            .stance_leg_angle_derivatives_in(&p.st, ddq.as_slice(), &bp.legs, bp.stance)?)
+    }
+
+    /// q̈_r for the actuator torques `u`: a₀ + M_r⁻¹ B_r u.
+    fn reduced_accelerations(&self, p: &Pinned, u: &[f64]) -> DVector<f64> {
+        let mut ddqr = p.drift_acceleration.clone();
+        for (k, &a) in self.biped.actuators.iter().enumerate() {
+            ddqr.axpy(u[k], &p.inverse.column(a), 1.0);
         }
+        ddqr
+    }
+
+    /// The closed-loop vector field at x: (q̇_r, q̈_r), the torque used and the outputs y.
+    fn field(&self, x: &[f64]) -> Result<Field> {
+        let nq = self.nq();
+        let nu = self.biped.nu();
+        let (qr, dqr) = (&x[..nq], &x[nq..]);
+        let p = self.pinned(qr, dqr)?;
+        let span = self.theta_minus - self.theta_plus;
+        let th = self.stance_angle(&p, &(&p.g * &p.drift_acceleration + &p.c))?;
+        let (tau, tau_rate) = ((th.theta - self.theta_plus) / span, th.rate / span);
+        let m = self.alpha.len();
+        let coords = &self.biped.output_coords;
+        let (mut y, mut dy) = (vec![0.0; m], vec![0.0; m]);
+        let mut slopes = Vec::with_capacity(m);
+        for o in 0..m {
+            let (b0, b1, b2) = bezier::eval_all(&self.alpha[o], tau);
+            y[o] = qr[coords[o]] - b0;
+            dy[o] = dqr[coords[o]] - b1 * tau_rate;
+            slopes.push((b1, b2));
+        }
+        let u = match &self.law {
+            Law::JointPd {
+                kp_nm_per_rad,
+                kd_nm_s_per_rad,
+                feedforward,
+                reference_delay_s,
+            } => {
+                let (mut yd, mut dyd) = (y.clone(), dy.clone());
+                let mut tau = tau;
+                if *reference_delay_s > 0.0 {
+                    tau -= tau_rate * reference_delay_s;
+                    for o in 0..m {
+                        let (b0, b1, _) = bezier::eval_all(&self.alpha[o], tau);
+                        yd[o] = qr[coords[o]] - b0;
+                        dyd[o] = dqr[coords[o]] - b1 * tau_rate;
+                    }
+                }
+                let mut ff = vec![0.0; m];
+                let knots: Vec<f64> = feedforward.iter().map(|(t, _)| *t).collect();
+                let rows: Vec<&[f64]> = feedforward.iter().map(|(_, u)| u.as_slice()).collect();
+                model::gait::interpolate(&knots, &rows, tau, &mut ff);
+                let mut u = vec![0.0; nu];
+                for (k, &a) in self.biped.actuators.iter().enumerate() {
+                    if let Some(o) = coords.iter().position(|&c| c == a) {
+                        u[k] = -kp_nm_per_rad * yd[o] - kd_nm_s_per_rad * dyd[o] + ff[o];
+                    }
+                }
+                u
+            }
+            Law::IoLinearizing => {
+                // ÿ is affine in u: ÿ = L_f²y + A u. ÿ at u = 0 and at each unit torque,
+                // through q̈_r and the stance-leg angle's θ̈ (affine in q̈).
+                let ddy = |ddqr: &DVector<f64>| -> Result<Vec<f64>> {
+                    let th = self.stance_angle(&p, &(&p.g * ddqr + &p.c))?;
+                    let tau_accel = th.accel / span;
+                    Ok((0..m)
+                        .map(|o| {
+                            let (b1, b2) = slopes[o];
+                            ddqr[coords[o]] - b2 * tau_rate * tau_rate - b1 * tau_accel
+                        })
+                        .collect())
+                };
+                let ddy0 = ddy(&p.drift_acceleration)?;
+                let mut big_a = DMatrix::zeros(m, nu);
+                for (k, &a) in self.biped.actuators.iter().enumerate() {
+                    let ddyk = ddy(&(&p.drift_acceleration + p.inverse.column(a)))?;
+                    for o in 0..m {
+                        big_a[(o, k)] = ddyk[o] - ddy0[o];
+                    }
+                }
+                let eps = self.options.epsilon_per_s;
+                let rhs = DVector::from_iterator(
+                    m,
+                    (0..m).map(|o| -(ddy0[o] + 2.0 * eps * dy[o] + eps * eps * y[o])),
+                );
+                let u = big_a.clone().lu().solve(&rhs).ok_or_else(|| {
+                    PlannerError::Solver(format!(
+                        "decoupling matrix A is singular at q = [{}] (reduced coordinates): {big_a}",
+                        qr.iter()
+                            .map(|v| format!("{v:.4}"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })?;
+                u.iter().copied().collect()
+            }
+        };
+        let ddqr = self.reduced_accelerations(&p, &u);
         let mut f = dqr.to_vec();
-        f.extend(ddq);
-        Ok((f, u.iter().copied().collect()))
+        f.extend(ddqr.iter());
+        Ok(Field { f, u, y })
     }
 
     fn rk4(&self, x: &[f64], h: f64) -> Result<Vec<f64>> {
-        let k1 = self.field(x)?.0;
+        let k1 = self.field(x)?.f;
         self.rk4_from(x, &k1, h)
     }
 
@@ -403,23 +442,28 @@ impl ClosedLoop {
         let add = |a: &[f64], k: &[f64], s: f64| -> Vec<f64> {
             a.iter().zip(k).map(|(p, q)| p + s * q).collect()
         };
-        let k2 = self.field(&add(x, k1, h / 2.0))?.0;
-        let k3 = self.field(&add(x, &k2, h / 2.0))?.0;
-        let k4 = self.field(&add(x, &k3, h))?.0;
+        let k2 = self.field(&add(x, k1, h / 2.0))?.f;
+        let k3 = self.field(&add(x, &k2, h / 2.0))?.f;
+        let k4 = self.field(&add(x, &k3, h))?.f;
         Ok((0..x.len())
             .map(|i| x[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]))
             .collect())
     }
 
+    /// The swing foot's position relative to the stance foot (which is at the origin), m: one
+    /// pass of the poses with the base anywhere.
     fn swing_foot(&self, x: &[f64]) -> Result<[f64; 2]> {
+        let bp = &self.biped;
         let nq = self.nq();
-        let [q, _, _] = self
-            .biped
-            .full_state(&x[..nq], &vec![0.0; nq], &vec![0.0; nq])?;
-        Ok(self
-            .biped
+        let mut st = model::kinematics::BodyStates::zeroed();
+        bp.states_at_rest_base(&x[..nq], &x[nq..], None, &mut st)?;
+        let swing = bp
             .model
-            .frame_position(&q, self.biped.legs.side(self.biped.swing()).foot)?)
+            .frame_position_in(&st, bp.legs.side(bp.swing()).foot);
+        let stance = bp
+            .model
+            .frame_position_in(&st, bp.legs.side(bp.stance).foot);
+        Ok([swing[0] - stance[0], swing[1] - stance[1]])
     }
 
     /// The impact inside the RK4 step from `x` to `end` (whose swing foot is below the ground):
@@ -473,7 +517,10 @@ impl ClosedLoop {
         let mut max_y = 0.0_f64;
         let max_time = 5.0;
         loop {
-            let next = self.rk4(&x, dt)?;
+            // The outputs at x come with the step's first stage.
+            let field = self.field(&x)?;
+            max_y = field.y.iter().fold(max_y, |m, v| m.max(v.abs()));
+            let next = self.rk4_from(&x, &field.f, dt)?;
             // A walking robot turns no joint (nor its torso) half a turn within a step: past
             // that it has fallen, and the controller's decoupling matrix soon turns singular.
             if let Some(i) = (0..nq).find(|&i| !below(next[i].abs(), std::f64::consts::PI)) {
@@ -505,8 +552,6 @@ impl ClosedLoop {
             }
             x = next;
             t += dt;
-            let (y, _, _) = self.outputs(&x[..nq], &x[nq..], &vec![0.0; nq])?;
-            max_y = y.iter().fold(max_y, |m, v| m.max(v.abs()));
             if t > max_time {
                 return Err(PlannerError::Solver(format!(
                     "no impact within {max_time} s: the robot does not step"
