@@ -114,7 +114,7 @@ pub fn codesign(
     config.validate("planner config")?;
     let start = Instant::now();
     let lengths = config.codesign.initial_m;
-    let (model, urdf) = generate(lengths, config.codesign.a1_drives)?;
+    let (model, urdf) = generate(lengths, &config.codesign)?;
     let initial = plan::plan_gait(&model, urdf_ref, &urdf, config, on_progress)?;
     let mut r = codesign_from(config, urdf_ref, &initial, lengths, lengths, on_progress)?;
     r.wall_time_s = start.elapsed().as_secs_f64();
@@ -185,7 +185,7 @@ fn codesign_run(
 ) -> Result<CodesignResult> {
     let start = Instant::now();
     let c = &config.codesign;
-    let (mut model, mut urdf) = generate(model_lengths, config.codesign.a1_drives)?;
+    let (mut model, mut urdf) = generate(model_lengths, &config.codesign)?;
     let mut nominal = model_lengths;
     let mut lengths = start_lengths;
     let mut x = initial.x.clone();
@@ -206,6 +206,7 @@ fn codesign_run(
             nominal_m: nominal,
             bounds_m: [c.thigh_m, c.shin_m],
             exact_inertia: exact,
+            mass: c.mass_model(),
         };
         let mut x0 = x.clone();
         x0.extend(lengths);
@@ -265,7 +266,7 @@ fn codesign_run(
             .max((found[1] - lengths[1]).abs());
         lengths = found;
         nominal = found;
-        (model, urdf) = generate(lengths, config.codesign.a1_drives)?;
+        (model, urdf) = generate(lengths, &config.codesign)?;
         x = xs[..n_fixed].to_vec();
         if exact || moved < c.tolerance_m {
             converged = true;
@@ -363,15 +364,17 @@ fn nlp_constraints(problem: &HzdProblem) -> usize {
     crate::nlp::NlpProblem::num_constraints(problem)
 }
 
-fn generate(lengths: [f64; 2], a1_drives: bool) -> Result<(model::PlanarModel, String)> {
+/// GenerateModel at `lengths` (thigh, shin, m) with the config's mass model (the tubes' density
+/// scale, the A1 drives).
+fn generate(
+    lengths: [f64; 2],
+    codesign: &crate::config::CodesignConfig,
+) -> Result<(model::PlanarModel, String)> {
     let design = DesignLengths {
         thigh_length_m: lengths[0],
         shin_length_m: lengths[1],
     };
-    let mass = model::design::MassModel {
-        a1_drives,
-        ..Default::default()
-    };
+    let mass = codesign.mass_model();
     let (model, urdf) =
         model::design::generate_model_with(&design, &mass).map_err(|e| PlannerError::Robot {
             robot: "adam_planar".into(),
@@ -530,7 +533,7 @@ pub fn fixed_design(
     lengths_m: [f64; 2],
 ) -> std::result::Result<SweepOutcome, String> {
     let run = || -> Result<SweepOutcome> {
-        let (model, urdf) = generate(lengths_m, config.codesign.a1_drives)?;
+        let (model, urdf) = generate(lengths_m, &config.codesign)?;
         let biped = PlanarBiped::new(model, config.gait.stance_leg, &[])?;
         let problem = HzdProblem::new(biped, config.clone(), initial.x.clone(), true)?;
         let (x, report) = plan::solve_stage(&problem, "fixed design", config, &mut |_| {})?;

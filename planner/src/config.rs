@@ -326,10 +326,34 @@ pub struct CodesignConfig {
     /// electrical cost needs). Default false: the rigid-body robot the shipped gaits use.
     #[serde(default)]
     pub a1_drives: bool,
+    /// Scale on the leg tubes' mass per metre (0.645 kg/m at 1; brackets, the knee's A1 and
+    /// the foot do not scale), in [`LINK_DENSITY_SCALE_RANGE`]: GenerateModel's robots and the
+    /// exact coupling's inertia fits both follow it ([`model::design::MassModel`]), so the
+    /// landscape and the co-design can be run with lighter or heavier links. Default 1.
+    #[serde(default = "default_link_density_scale")]
+    pub link_density_scale: f64,
 }
 
 fn default_landscape_grid() -> usize {
     9
+}
+
+fn default_link_density_scale() -> f64 {
+    1.0
+}
+
+/// The link density scales `[codesign] link_density_scale` accepts: a tenth to five times the
+/// shipped tube (0.065–3.2 kg/m).
+pub const LINK_DENSITY_SCALE_RANGE: [f64; 2] = [0.1, 5.0];
+
+impl CodesignConfig {
+    /// The mass model GenerateModel and the inertia fits use for this config's designs.
+    pub fn mass_model(&self) -> model::design::MassModel {
+        model::design::MassModel {
+            link_density_scale: self.link_density_scale,
+            a1_drives: self.a1_drives,
+        }
+    }
 }
 
 /// The convergence study's settings (`[codesign.sweep]`, `adam codesign sweep`).
@@ -401,6 +425,7 @@ impl Default for CodesignConfig {
             sweep: SweepConfig::default(),
             landscape_grid: default_landscape_grid(),
             a1_drives: false,
+            link_density_scale: default_link_density_scale(),
         }
     }
 }
@@ -605,6 +630,17 @@ impl PlannerConfig {
             }
         }
         positive("codesign.tolerance_m", c.tolerance_m)?;
+        let [lo, hi] = LINK_DENSITY_SCALE_RANGE;
+        if !(lo..=hi).contains(&c.link_density_scale) {
+            return Err(bad(
+                "codesign.link_density_scale",
+                c.link_density_scale.to_string(),
+                &format!(
+                    "must be in [{lo}, {hi}] (a scale on the leg tubes' 0.645 kg/m; 1 is the \
+                     shipped tube)"
+                ),
+            ));
+        }
         if !(1..=MAX_SWEEP_GRID).contains(&c.sweep.grid) {
             return Err(bad(
                 "codesign.sweep.grid",
@@ -688,6 +724,18 @@ mod tests {
                 "shin_m = [0.15, 0.9]",
                 "codesign.shin_m",
                 "[0.15, 0.9]",
+            ),
+            (
+                "link_density_scale = 1.0",
+                "link_density_scale = 0.05",
+                "codesign.link_density_scale",
+                "0.05",
+            ),
+            (
+                "link_density_scale = 1.0",
+                "link_density_scale = nan",
+                "codesign.link_density_scale",
+                "NaN",
             ),
             ("grid = 5", "grid = 0", "codesign.sweep.grid", "0"),
             ("grid = 5", "grid = 21", "codesign.sweep.grid", "21"),

@@ -92,6 +92,7 @@ fn problem(exact: bool, with_cost: bool) -> (HzdProblem, Vec<f64>) {
         nominal_m: [0.24, 0.25],
         bounds_m: [[0.15, 0.35], [0.15, 0.35]],
         exact_inertia: exact,
+        mass: model::design::MassModel::default(),
     };
     let probe = HzdProblem::with_codesign(
         bp.clone(),

@@ -94,7 +94,7 @@ fn solve_point(
     x0: &[f64],
     warm: Option<&WarmStart>,
 ) -> Result<Solved> {
-    let (model, urdf) = generate(lengths_m, config.codesign.a1_drives)?;
+    let (model, urdf) = generate(lengths_m, &config.codesign)?;
     let biped = PlanarBiped::new(model, config.gait.stance_leg, &[])?;
     let problem = HzdProblem::new(biped, config.clone(), x0.to_vec(), true)?;
     let attempt = plan::solve_stage_attempt(

@@ -262,7 +262,7 @@ pub fn codesign_speeds(
 ) -> Result<MultiSpeedResult> {
     let c = &config.codesign;
     let lengths = c.initial_m;
-    let (model, urdf) = generate(lengths, config.codesign.a1_drives)?;
+    let (model, urdf) = generate(lengths, &config.codesign)?;
     let at_speed = |v: f64| {
         let mut cfg = config.clone();
         cfg.gait.speed_mps = Some([v, v]);
@@ -280,6 +280,7 @@ pub fn codesign_speeds(
             nominal_m: lengths,
             bounds_m: [c.thigh_m, c.shin_m],
             exact_inertia: true,
+            mass: c.mass_model(),
         };
         blocks.push(HzdProblem::with_codesign(biped, cfg, x0, true, Some(spec))?);
     }
@@ -323,7 +324,7 @@ pub fn codesign_speeds(
         })
         .collect();
     // Each speed's gait on the co-designed robot, design fixed, from its block's solution.
-    let (model, urdf) = generate(found, config.codesign.a1_drives)?;
+    let (model, urdf) = generate(found, &config.codesign)?;
     let mut gaits = Vec::new();
     for (s, &v) in speeds_mps.iter().enumerate() {
         let cfg = at_speed(v)?;

@@ -79,6 +79,9 @@ pub struct Codesign {
     /// coupling, differentiated with everything else); false: frozen at the model's (the
     /// inner solve of the paper's Alg. 1).
     pub exact_inertia: bool,
+    /// The mass model the fits of exact coupling sample (the config's
+    /// [`crate::config::CodesignConfig::mass_model`]: the leg tubes' density scale).
+    pub mass: model::design::MassModel,
 }
 
 /// What the co-design needs of the model: the thigh and shin bodies of both legs and the fits.
@@ -137,11 +140,12 @@ impl HzdProblem {
                     thigh_bodies[k] = biped.model.joints[leg.hip].body;
                     shin_bodies[k] = biped.model.joints[leg.knee].body;
                 }
+                let fits = model::design::InertiaFits::adam_with(&spec.mass);
                 Some(DesignModel {
                     spec,
                     thigh_bodies,
                     shin_bodies,
-                    fits: model::design::InertiaFits::adam(),
+                    fits,
                     base: biped.model.bodies.iter().map(|b| b.inertia).collect(),
                 })
             }

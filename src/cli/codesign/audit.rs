@@ -37,10 +37,7 @@ pub(crate) fn audit(
                     thigh_length_m: thigh,
                     shin_length_m: shin,
                 },
-                &model::design::MassModel {
-                    a1_drives: cfg.codesign.a1_drives,
-                    ..Default::default()
-                },
+                &cfg.codesign.mass_model(),
             )?;
             (
                 model,

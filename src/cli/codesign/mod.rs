@@ -339,7 +339,7 @@ fn rayon_threads() -> usize {
 }
 
 /// The gait planned at `[codesign] initial_m` on the robot GenerateModel makes there (with the
-/// A1 drives if `[codesign] a1_drives`): the warm start of the sweep and the landscape.
+/// A1 drives if `[codesign] a1_drives`, the tubes' `link_density_scale`): the warm start of the sweep and the landscape.
 pub(super) fn warm_start(
     cfg: &planner::config::PlannerConfig,
 ) -> Result<planner::plan::PlannedGait> {
@@ -349,10 +349,7 @@ pub(super) fn warm_start(
             thigh_length_m: thigh_m,
             shin_length_m: shin_m,
         },
-        &model::design::MassModel {
-            a1_drives: cfg.codesign.a1_drives,
-            ..Default::default()
-        },
+        &cfg.codesign.mass_model(),
     )?;
     println!("warm start: planning the gait at thigh {thigh_m} m, shin {shin_m} m");
     Ok(planner::plan::plan_gait(
