@@ -18,6 +18,7 @@
 //! | [`sim::robot`] | the rigid-body plant: the planar ADAM on a treadmill (optional boom): point-foot contact, impacts, falls, ground truth; a `JointPlant`; pushes, belt steps, IMU faults |
 //! | [`imu`] | the [`imu::Imu`] trait (pitch rate, specific force) the simulator and the runtime share, a seeded noise model and [`imu::ImuFault`] (dropout, spike, frozen) |
 //! | [`conformance`] | the checks every `MotorBus` must pass |
+//! | [`vn100`] | the VectorNav VN-100 torso IMU: sans-IO binary-frame parser (sync, groups, CRC-16, resync), its configuration commands, the mounting's axes, the driver over a serial port (`serialport`, no libudev; an [`imu::Imu`]) and an emulated VN-100 on a pseudo-terminal |
 //!
 //! ## Data flow of one control cycle
 //! ```text
@@ -74,3 +75,4 @@ mod noise;
 pub mod sim;
 pub mod socketcan_bus;
 pub mod timing;
+pub mod vn100;
