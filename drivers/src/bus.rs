@@ -221,9 +221,9 @@ impl ExchangeReport {
 
 /// A set of A1 motors behind one or more CAN buses, with a safe lifecycle.
 ///
-/// Implementations: [`crate::sim::bus::SimBus`] (simulated firmware behind the real codec)
-/// and [`crate::socketcan_bus::SocketCanBus`] (Linux SocketCAN). Both pass
-/// [`crate::conformance`].
+/// Implementations: [`crate::sim::bus::SimBus`] (simulated firmware behind the real codec),
+/// [`crate::socketcan_bus::SocketCanBus`] (Linux SocketCAN) and [`crate::udp::UdpBus`] (CAN over
+/// UDP, cannelloni's format). All pass [`crate::conformance`].
 pub trait MotorBus {
     /// Current lifecycle state.
     fn state(&self) -> Lifecycle;
@@ -252,6 +252,13 @@ pub trait MotorBus {
     /// `Configured`. Allowed when `Configured` or `Active`; the state becomes `Configured`
     /// even if some motor did not acknowledge (that motor is named in the error).
     fn deactivate(&mut self) -> Result<()>;
+
+    /// The CAN frames the last `activate`, `exchange` or `deactivate` sent and received, in
+    /// wire order ([`crate::frame_log`]); empty for a backend that does not record. Allocates
+    /// nothing: the runtime logs them every tick.
+    fn frames(&self) -> &[crate::frame_log::LoggedFrame] {
+        &[]
+    }
 }
 
 /// The configured motor set, in fixed storage (no allocation).

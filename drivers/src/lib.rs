@@ -10,6 +10,8 @@
 //! | [`timing`] | CAN bus time of A1 traffic; `validate(rate, motors per bus, bitrate)` |
 //! | [`bus`] | the [`bus::MotorBus`] trait: configure → activate → exchange → deactivate, `Drop` = damping |
 //! | [`socketcan_bus`] | `MotorBus` on Linux SocketCAN, one interface per limb |
+//! | [`udp`] | `MotorBus` over CAN-over-UDP links in cannelloni's packet format (sans-IO codec, [`udp::UdpBus`]), and [`udp::serve`]: a `SimBus` served over them (`adam emulate motors`) |
+//! | [`frame_log`] | the CAN frames of a bus's last operation (bus, direction, id, data, time), which every `MotorBus` hands to the runtime's log |
 //! | [`sim`] | the simulated hardware, a room per concern: |
 //! | [`sim::bus`] | [`sim::bus::SimBus`]: `MotorBus` on simulated A1 firmware and a pluggable [`sim::plant::JointPlant`]; frames in, replies out, exact bus time; motor faults (silent, hot, error flags) |
 //! | [`sim::firmware`] | the A1 firmware model: encoder, PD at 10 kHz, torque–speed envelope, heat, lifecycle |
@@ -70,9 +72,11 @@
 pub mod a1;
 pub mod bus;
 pub mod conformance;
+pub mod frame_log;
 pub mod imu;
 mod noise;
 pub mod sim;
 pub mod socketcan_bus;
 pub mod timing;
+pub mod udp;
 pub mod vn100;

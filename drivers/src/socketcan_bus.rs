@@ -19,6 +19,7 @@ use crate::a1::{self, Frame, FrameKind, Special};
 use crate::bus::{
     BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation, MAX_MOTORS,
 };
+use crate::frame_log::{FrameDirection, FrameLog, LoggedFrame};
 use core::time::Duration;
 use socketcan::{
     CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, SocketOptions, StandardId,
@@ -112,6 +113,7 @@ pub struct SocketCanBus {
     interfaces: Vec<Interface>,
     table: MotorTable,
     state: Lifecycle,
+    frames: FrameLog,
 }
 
 impl SocketCanBus {
@@ -142,6 +144,7 @@ impl SocketCanBus {
             interfaces: opened,
             table: MotorTable::default(),
             state: Lifecycle::Unconfigured,
+            frames: FrameLog::default(),
         })
     }
 
@@ -173,7 +176,7 @@ impl SocketCanBus {
     }
 
     fn write(
-        &self,
+        &mut self,
         bus: usize,
         frame: &Frame,
         deadline: Instant,
@@ -185,7 +188,16 @@ impl SocketCanBus {
         let socket = &self.interfaces[bus].socket;
         loop {
             match socket.write_frame(&can) {
-                Ok(()) => return Ok(()),
+                Ok(()) => {
+                    self.frames.record(
+                        bus,
+                        FrameDirection::Tx,
+                        start.elapsed(),
+                        frame.id,
+                        &frame.data,
+                    );
+                    return Ok(());
+                }
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
                     if Instant::now() >= deadline {
                         return Err(BusError::DeadlineExceeded {
@@ -208,7 +220,7 @@ impl SocketCanBus {
     /// Send `frames[i]` on `buses[i]` and collect the reply of `motors[i]` into
     /// `on_reply(i, reply)`, until all arrived or `budget` ran out.
     fn round_trip(
-        &self,
+        &mut self,
         frames: &[Frame],
         buses: &[usize],
         budget: Duration,
@@ -216,6 +228,7 @@ impl SocketCanBus {
     ) -> Result<Duration, BusError> {
         let start = Instant::now();
         let deadline = start + budget;
+        self.frames.clear();
         self.drain()?;
         for (frame, &bus) in frames.iter().zip(buses) {
             self.write(bus, frame, deadline, start)?;
@@ -224,8 +237,8 @@ impl SocketCanBus {
         let mut outstanding = frames.len();
         while outstanding > 0 {
             let mut idle = true;
-            for (bus, iface) in self.interfaces.iter().enumerate() {
-                let frame = match iface.socket.read_frame() {
+            for bus in 0..self.interfaces.len() {
+                let frame = match self.interfaces[bus].socket.read_frame() {
                     Ok(frame) => frame,
                     Err(e) if e.kind() == io::ErrorKind::WouldBlock => continue,
                     Err(e) => {
@@ -244,6 +257,13 @@ impl SocketCanBus {
                         if let Some(i) = slot.filter(|&i| !got[i]) {
                             got[i] = true;
                             outstanding -= 1;
+                            self.frames.record(
+                                bus,
+                                FrameDirection::Rx,
+                                start.elapsed(),
+                                frame.raw_id(),
+                                frame.data(),
+                            );
                             on_reply(i, reply);
                         }
                     }
@@ -275,7 +295,7 @@ impl SocketCanBus {
         Ok(start.elapsed())
     }
 
-    fn special_to_all(&self, special: Special) -> Result<(), BusError> {
+    fn special_to_all(&mut self, special: Special) -> Result<(), BusError> {
         let mut frames = [encode_placeholder(); MAX_MOTORS];
         let mut buses = [0; MAX_MOTORS];
         let mut specs: [Option<MotorSpec>; MAX_MOTORS] = [None; MAX_MOTORS];
@@ -370,6 +390,10 @@ impl MotorBus for SocketCanBus {
         }
         self.state = Lifecycle::Configured;
         self.special_to_all(Special::Disable)
+    }
+
+    fn frames(&self) -> &[LoggedFrame] {
+        self.frames.frames()
     }
 }
 

@@ -292,8 +292,15 @@ pub fn render() -> String {
         );
     }
     out.push_str(
-        "CM_ \"A1 actuators bridged to classic CAN for the ADAM humanoid. Joint-side units. \
-         Layout: drivers::a1 module docs.\";\n",
+        "CM_ \"OUR ASSUMPTION, not a Unitree protocol. The Unitree A1 actuator's own link is \
+         RS-485 (Unitree's serial motor protocol), not CAN. This file describes the classic-CAN \
+         framing (11-bit ids, DLC 8) that adam-hzd assumes a per-limb RS-485-to-CAN bridge \
+         speaks for ADAM's A1s; the layout is adam-hzd's own (packed like the MIT Cheetah \
+         motor protocol, but not compatible with it). No bridge firmware speaking it ships with \
+         adam-hzd or is sold: a lab flashes its own bridge (a microcontroller with an RS-485 and \
+         a CAN transceiver that turns each frame below into an A1 RS-485 command and the motor's \
+         answer into a reply frame), or writes a MotorBus over the RS-485 link directly. \
+         Joint-side units. Layout: drivers::a1 module docs.\";\n",
     );
     for id in DBC_MOTOR_IDS.filter_map(MotorId::new) {
         let _ = writeln!(

@@ -1,9 +1,24 @@
 //! The Unitree A1 actuator reached over classic CAN: frame layout and codec.
 //!
-//! The A1's native link is RS-485; on ADAM a per-limb bridge puts it on classic CAN
-//! (8-byte frames, 11-bit ids). This module defines that framing. It borrows the *idea* of
-//! the MIT Cheetah motor driver's protocol (packed fixed-point fields in one 8-byte frame,
-//! escape frames for enable/disable/zero) but its layout, ids and ranges are our own.
+//! # The link we assume (our assumption, not Unitree's)
+//! The A1's own link is **RS-485**, with Unitree's serial motor protocol; the A1 has no CAN
+//! port. adam-hzd **assumes** a per-limb bridge that puts the A1s of one limb on one classic
+//! CAN bus (8-byte frames, 11-bit ids, 1 Mbit/s by default) and speaks exactly the framing
+//! this module defines, translating each frame into an A1 RS-485 command and each motor answer
+//! into a reply frame. That framing borrows the *idea* of the MIT Cheetah motor driver's
+//! protocol (packed fixed-point fields in one 8-byte frame, escape frames for
+//! enable/disable/zero) but its layout, ids and ranges are our own: no existing firmware
+//! speaks it, none ships with adam-hzd, and none can be bought. A lab that runs this runtime
+//! on ADAM's A1s needs one of:
+//! * a bridge it builds and flashes itself: a microcontroller with an RS-485 transceiver for
+//!   the A1s and a CAN transceiver for the host, running firmware that implements the frame
+//!   table below (`drivers/a1_can.dbc` is the same table for CAN tools) on one side and
+//!   Unitree's A1 serial protocol on the other;
+//! * or a `MotorBus` of its own over the RS-485 link (a USB–RS-485 adapter and Unitree's
+//!   protocol), in place of `SocketCanBus`: the controller only sees the trait.
+//!
+//! The host side is then SocketCAN (`SocketCanBus`), or CAN over UDP through a CAN-to-Ethernet
+//! gateway running cannelloni ([`crate::udp`]). The DBC's comment says the same.
 //! [`codec`] is sans-IO: it turns [`Command`]s into [`Frame`]s and bytes into [`Reply`]s
 //! or typed [`DecodeError`]s, with no socket, no allocation and no string formatting.
 //! `drivers/a1_can.dbc` describes the same frames for standard CAN tools, and a test

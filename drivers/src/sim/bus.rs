@@ -33,6 +33,7 @@
 
 use crate::a1::{self, Command, ErrorFlags, Frame, MotorId, Reply, Special};
 use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation};
+use crate::frame_log::{FrameDirection, FrameLog, LoggedFrame};
 use crate::imu::{Imu, ImuError, ImuSample};
 use crate::sim::firmware::{A1Model, Firmware, SimMotor, TickPeriod};
 use crate::sim::plant::JointPlant;
@@ -118,6 +119,7 @@ pub struct SimBus<P: JointPlant> {
     wire_faults: WireFaults,
     fault_rng: ChaCha8Rng,
     wire_stats: WireStats,
+    frames: FrameLog,
 }
 
 /// Mixed into the seed of the fault stream, so it differs from the noise stream.
@@ -178,6 +180,7 @@ impl<P: JointPlant> SimBus<P> {
             wire_faults: WireFaults::NONE,
             fault_rng: ChaCha8Rng::seed_from_u64(config.seed ^ FAULT_STREAM),
             wire_stats: WireStats::default(),
+            frames: FrameLog::default(),
             config,
         })
     }
@@ -304,6 +307,7 @@ impl<P: JointPlant> SimBus<P> {
         let model = self.config.model;
         // Host → motor. A lost frame still took its bus time (the receiver missed it).
         bits[bus] += frame_bits_exact(frame.id, &frame.data).unwrap_or(0);
+        self.log_frame(bus, FrameDirection::Tx, bits[bus], frame.id, &frame.data);
         self.record(bus, Direction::ToMotor, frame);
         let fault = budget.and_then(|_| self.wire_fault());
         let (id, data, len) = match fault {
@@ -320,6 +324,13 @@ impl<P: JointPlant> SimBus<P> {
         bits[bus] += frame_bits_exact(reply_frame.id, &reply_frame.data).unwrap_or(0);
         self.record(bus, Direction::ToHost, &reply_frame);
         let Some(budget) = budget else {
+            self.log_frame(
+                bus,
+                FrameDirection::Rx,
+                bits[bus],
+                reply_frame.id,
+                &reply_frame.data,
+            );
             return a1::decode_reply(reply_frame.id, &reply_frame.data).ok();
         };
         let (id, data, len) = match self.wire_fault() {
@@ -327,6 +338,8 @@ impl<P: JointPlant> SimBus<P> {
             Some(WireFault::Corrupted(damage)) => corrupt(&reply_frame, damage),
             None => (reply_frame.id, reply_frame.data, reply_frame.data.len()),
         };
+        // What the host received, damaged or not, at the end of its bus time.
+        self.log_frame(bus, FrameDirection::Rx, bits[bus], id, &data[..len]);
         let f = self.wire_faults;
         if f.delay_probability > 0.0 && self.fault_rng.random::<f64>() < f.delay_probability {
             self.wire_stats.delayed += 1;
@@ -340,6 +353,51 @@ impl<P: JointPlant> SimBus<P> {
             }
         }
         a1::decode_reply(id, &data[..len]).ok()
+    }
+
+    /// Into the frame log, stamped with the bus time at which it ended on its bus (`bits` on
+    /// that bus so far, itself included).
+    fn log_frame(
+        &mut self,
+        bus: usize,
+        direction: FrameDirection,
+        bits: u32,
+        id: u32,
+        data: &[u8],
+    ) {
+        let offset = bits_to_duration(bits, self.config.bitrate_bps);
+        self.frames.record(bus, direction, offset, id, data);
+    }
+
+    /// Frame-level access for a server that puts this simulation behind a real transport
+    /// ([`crate::udp::serve`]): deliver one host frame (id and bytes as received) on `bus` to the
+    /// firmware, as the wire delivers it with no faults; the reply frame of the motor that
+    /// answers, if any. Recorded on the tap. Time does not move: see
+    /// [`SimBus::advance_period`].
+    pub fn deliver(&mut self, bus: usize, id: u32, data: &[u8]) -> Option<Frame> {
+        let model = self.config.model;
+        if let Some(tap) = &self.tap {
+            if let (Ok(mut log), Ok(data)) = (tap.lock(), <[u8; 8]>::try_from(data)) {
+                log.push(TapEntry {
+                    bus,
+                    direction: Direction::ToMotor,
+                    frame: Frame { id, data },
+                });
+            }
+        }
+        let reply = self
+            .firmware
+            .iter_mut()
+            .filter(|f| f.motor.spec.bus == bus)
+            .find_map(|f| f.receive(id, data, &model))?;
+        self.record(bus, Direction::ToHost, &reply);
+        Some(reply)
+    }
+
+    /// Advance the motors and the plant by one control period and latch the commands received
+    /// (what [`MotorBus::exchange`] does after delivering its frames).
+    pub fn advance_period(&mut self) {
+        self.advance();
     }
 
     fn record(&self, bus: usize, direction: Direction, frame: &Frame) {
@@ -356,6 +414,7 @@ impl<P: JointPlant> SimBus<P> {
 
     /// Send a special frame to every configured motor; the first silent one, if any.
     fn special_to_all(&mut self, special: Special) -> Result<(), BusError> {
+        self.frames.clear();
         let mut first_error = None;
         let mut bits = [0; MAX_BUSES];
         let table = self.table;
@@ -429,8 +488,20 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
             });
         }
         if let Err(e) = self.special_to_all(Special::Enable) {
-            // Leave nothing half enabled.
+            // Leave nothing half enabled; the frame log keeps both rounds.
+            let enable_frames = self.frames;
             let _ = self.special_to_all(Special::Disable);
+            let disable_frames = core::mem::replace(&mut self.frames, enable_frames);
+            for f in disable_frames.frames() {
+                let offset = Duration::from_nanos(u64::from(f.offset_ns));
+                self.frames.record(
+                    usize::from(f.bus),
+                    f.direction,
+                    offset,
+                    f.can_id,
+                    f.payload(),
+                );
+            }
             return Err(e);
         }
         self.state = Lifecycle::Active;
@@ -447,6 +518,7 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
             return Err(BusError::NotActive { state: self.state });
         }
         let (frames, buses, saturation) = self.table.prepare(commands, replies)?;
+        self.frames.clear();
         let mut bits = [0u32; MAX_BUSES];
         let mut missing = None;
         for i in 0..commands.len() {
@@ -487,6 +559,10 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
         }
         self.state = Lifecycle::Configured;
         self.special_to_all(Special::Disable)
+    }
+
+    fn frames(&self) -> &[LoggedFrame] {
+        self.frames.frames()
     }
 }
 
