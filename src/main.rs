@@ -21,7 +21,7 @@ use cli::bench::BenchWhat;
 use cli::codesign::CodesignStudy;
 use cli::logs::{LogsCommand, PlotWhat};
 use cli::plan::GaitCommand;
-use cli::{bench, codesign, logs, model, op, plan, run};
+use cli::{bench, calibrate, can, codesign, logs, model, op, plan, run};
 
 mod cli;
 
@@ -93,6 +93,14 @@ enum Command {
     Replay(logs::ReplayArgs),
     /// Write the URDF of ADAM for a design (GenerateModel: inertias from the cubic fits).
     GenerateUrdf(model::GenerateUrdfArgs),
+    /// Measure each leg motor's direction and zero offset (robot hung on the boom, legs clamped
+    /// in the config's jig poses A then B) and write them into a new runtime config.
+    Calibrate(calibrate::CalibrateArgs),
+    /// The motor buses: `adam can scan --backend sim|can` asks every configured motor.
+    Can {
+        #[command(subcommand)]
+        command: can::CanCommand,
+    },
 }
 
 fn main() -> std::process::ExitCode {
@@ -122,6 +130,10 @@ fn dispatch(cli: Cli) -> Result<()> {
             command: LogsCommand::Recover { log, out, force },
         } => logs::recover(log, out, force),
         Command::Replay(args) => logs::replay(&args),
+        Command::Calibrate(args) => calibrate::calibrate(args),
+        Command::Can {
+            command: can::CanCommand::Scan(args),
+        } => can::scan(args),
         Command::Model(args) => model::show_model(&args),
         Command::Bench {
             what:

@@ -7,13 +7,14 @@
 use std::path::{Path, PathBuf};
 
 /// The kinds of input: folder, file extension.
-const KINDS: [(&str, &str); 10] = [
+const KINDS: [(&str, &str); 11] = [
     ("urdf", "urdf"),
     ("gait", "json"),
     ("gait_library", "json"),
     ("gait_robot", "json"),
     ("planner_config", "toml"),
     ("runtime_config", "toml"),
+    ("runtime_setup", "toml"),
     ("faults", "toml"),
     ("can", "can"),
     ("mcap", "mcap"),
@@ -65,6 +66,14 @@ fn load(kind: &str, path: &Path) -> Vec<Result<String, String>> {
         "runtime_config" => vec![refused(
             "RuntimeConfig::load",
             runtime::config::RuntimeConfig::load(path),
+        )],
+        // A runtime config that reads but does not fit the robot (its URDF joint limits).
+        "runtime_setup" => vec![refused(
+            "runtime::Setup::load",
+            runtime::Setup::load(
+                path,
+                Path::new(env!("CARGO_MANIFEST_DIR")).join(runtime::DEFAULT_GAIT),
+            ),
         )],
         "faults" => vec![refused(
             "FaultProfile::load",

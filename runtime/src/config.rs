@@ -1,14 +1,19 @@
 //! The runtime config (`configs/runtime/*.toml`): loop rate, buses, motors, gains, ramp,
 //! safety limits, held joint positions, logging and telemetry, and the treadmill's belt speed
 //! range ([`TreadmillConfig`]: every belt speed a run asks for is checked against it), and the
-//! treadmill speed control's gains ([`SpeedConfig`]).
+//! treadmill speed control's gains ([`SpeedConfig`]), the joint calibration
+//! ([`CalibrationConfig`]) and the bring-up's pre-flight limits and gains ramp ([`BringupConfig`]).
 //!
 //! Checked data: `deny_unknown_fields` everywhere, a `schema_version`, and [`RuntimeConfig::validate`]
 //! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
 //! [`drivers::timing::validate`] refuses, naming the file, the field and the value.
 
+mod bringup;
+pub mod calibration;
 mod speed;
 
+pub use bringup::BringupConfig;
+pub use calibration::{CalibrationConfig, JointCalibration};
 pub use speed::{PositionSource, SpeedConfig};
 
 use crate::slots::{SlotLayout, LEG_SLOTS, MAX_HELD, SLOTS};
@@ -57,10 +62,12 @@ pub struct MotorConfig {
     pub bus: usize,
     /// A1 motor id on that bus (1..=127, unique over all buses).
     pub id: u8,
-    /// +1 or −1: model joint angle = direction · motor angle + offset.
+    /// Kept so that configs (and logs) written before `[calibration]` still read: must be 1;
+    /// a leg joint's direction is `calibration.<joint>.direction`.
     #[serde(default = "one")]
     pub direction: f64,
-    /// Offset of the model joint angle at motor zero, rad.
+    /// Kept like `direction`: must be 0; a leg joint's zero offset is
+    /// `calibration.<joint>.zero_offset_rad`.
     #[serde(default)]
     pub offset_rad: f64,
 }
@@ -356,6 +363,12 @@ pub struct RuntimeConfig {
     /// Speed control on the treadmill (absent: [`SpeedConfig::default`]).
     #[serde(default)]
     pub speed: SpeedConfig,
+    /// How each leg motor maps to its joint (absent: the identity).
+    #[serde(default)]
+    pub calibration: CalibrationConfig,
+    /// Pre-flight limits and the gains ramp (absent: [`BringupConfig::default`]).
+    #[serde(default)]
+    pub bringup: BringupConfig,
 }
 
 /// The URDF joint of each leg slot.
@@ -508,14 +521,14 @@ impl RuntimeConfig {
             if motors[..i].iter().any(|(_, o)| o.id == m.id) {
                 return Err(bad(&format!("{field}.id"), m.id.to_string(), "used twice"));
             }
-            if m.direction != 1.0 && m.direction != -1.0 {
+            if m.direction != 1.0 || m.offset_rad != 0.0 {
                 return Err(bad(
-                    &format!("{field}.direction"),
-                    m.direction.to_string(),
-                    "must be 1 or -1",
+                    &format!("{field}.direction/offset_rad"),
+                    format!("{} / {}", m.direction, m.offset_rad),
+                    "a motor's direction and offset live in [calibration.<joint>] \
+                     (direction, zero_offset_rad); leave these out",
                 ));
             }
-            finite(&format!("{field}.offset_rad"), m.offset_rad)?;
         }
         for (i, (m, name)) in self.leg_motors.iter().zip(LEG_JOINT_NAMES).enumerate() {
             if m.joint != name {
@@ -624,6 +637,8 @@ impl RuntimeConfig {
             e.touchdown_pitch_sigma_rad,
         )?;
         self.speed.validate(origin)?;
+        self.calibration.validate(origin)?;
+        self.bringup.validate(origin)?;
         let [lo, hi] = self.treadmill.belt_speed_range_mps;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
             return Err(bad(
@@ -709,15 +724,17 @@ impl SlotLayout {
             present: [false; SLOTS],
             direction: [1.0; LEG_SLOTS],
             offset_rad: [0.0; LEG_SLOTS],
+            gear_ratio: [1.0; LEG_SLOTS],
             held_center_rad: [0.0; SLOTS],
             held_tolerance_rad: [0.0; SLOTS],
             held_kp: [0.0; SLOTS],
             held_kd: [0.0; SLOTS],
         };
-        for (k, m) in config.leg_motors.iter().enumerate() {
+        for (k, (_, c)) in config.calibration.joints().into_iter().enumerate() {
             l.present[k] = true;
-            l.direction[k] = m.direction;
-            l.offset_rad[k] = m.offset_rad;
+            l.direction[k] = c.direction_factor();
+            l.offset_rad[k] = c.zero_offset_rad;
+            l.gear_ratio[k] = c.gear_ratio;
         }
         for (i, h) in config.held.iter().enumerate().take(MAX_HELD) {
             let s = LEG_SLOTS + i;

@@ -70,6 +70,19 @@ pub enum RuntimeError {
     /// The robot backend needs a torso IMU driver, and none exists yet.
     #[error("no IMU driver for the robot's torso IMU yet: the CAN buses opened, but the loop needs pitch and pitch rate")]
     NoImuDriver,
+    /// The pre-flight checks refused to let the gains come on (`runtime::bringup`).
+    #[error("pre-flight refused, no gain was turned on:{refusals}")]
+    Preflight {
+        /// Every refusal, one per line, each naming the motor (joint, bus, id) or the IMU and
+        /// the value.
+        refusals: String,
+    },
+    /// `adam calibrate` measured something it cannot turn into a calibration.
+    #[error("calibration failed:{problems}")]
+    Calibration {
+        /// Every problem, one per line, each naming the joint, motor and value.
+        problems: String,
+    },
     /// A log was written with another channel layout than this build reads.
     #[error("MCAP log {path}: channel `{channel}` has log schema version {found}, this build reads version {expected}: open it with the adam version that wrote it")]
     LogSchemaVersion {

@@ -8,7 +8,8 @@
 //! | module | what |
 //! |---|---|
 //! | [`slots`] | the motor slots everyone shares: [`slots::MotorSample`], [`slots::SlotLayout`], slot counts (a leaf) |
-//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints, treadmill speed control (`[speed]`) |
+//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints, treadmill speed control (`[speed]`), joint calibration (`[calibration]`), pre-flight limits and gains ramp (`[bringup]`) |
+//! | [`bringup`] | before the first gain: `adam can scan` ([`bringup::scan`]), `adam calibrate` ([`bringup::calibrate()`]: jig poses → directions and zero offsets), the pre-flight ([`bringup::preflight()`]: each refusal names motor, bus and value); `--dry-run` is [`LoopOptions::dry_run`] |
 //! | [`control`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine ([`control::Controller`]); double support; treadmill speed control at impacts (a gait library by speed, a step-to-step regulator, the belt-position loop: [`Setup::library`], [`control::Controller::with_library`]) |
 //! | [`estimator`] | torso pitch Kalman filter with gyro-bias estimation |
 //! | [`safety`] | per-tick checks; a [`safety::Trip`] (small `Copy` enum) sends the controller to Damping |
@@ -59,6 +60,7 @@
 //! ```
 
 pub mod backend;
+pub mod bringup;
 pub mod config;
 pub mod control;
 mod error;
@@ -116,6 +118,7 @@ impl Setup {
         let library = config.speed.library.clone();
         let setup = Self::assemble(
             config,
+            &config_path.display().to_string(),
             gait,
             &gait_path.display().to_string(),
             text,
@@ -142,11 +145,19 @@ impl Setup {
         urdf_text: String,
         urdf_origin: &str,
     ) -> Result<Self> {
-        Self::assemble(config, gait, "the gait file", urdf_text, urdf_origin)
+        Self::assemble(
+            config,
+            "the runtime config",
+            gait,
+            "the gait file",
+            urdf_text,
+            urdf_origin,
+        )
     }
 
     fn assemble(
         config: config::RuntimeConfig,
+        config_origin: &str,
         gait: model::gait::GaitFile,
         gait_origin: &str,
         urdf_text: String,
@@ -165,6 +176,7 @@ impl Setup {
         }
         let model = model::PlanarModel::from_urdf_str(&urdf_text, urdf_origin)?;
         gait.check_against(&model, gait_origin, urdf_origin)?;
+        config.calibration.check_against(&model, config_origin)?;
         Ok(Self {
             config,
             gait,

@@ -96,6 +96,9 @@ pub struct LoopOptions {
     /// End the run this long after a safety trip (the soak then restarts on a fresh robot);
     /// `None`: run the whole duration.
     pub stop_after_trip_s: Option<f64>,
+    /// Dry run: the whole loop runs, but every motor is sent zero torque (damping with no
+    /// gain); the log's commands are what the controller would have sent (`adam run --dry-run`).
+    pub dry_run: bool,
 }
 
 impl LoopOptions {
@@ -110,6 +113,7 @@ impl LoopOptions {
             realtime: false,
             start_walking: false,
             stop_after_trip_s: None,
+            dry_run: false,
         }
     }
 }
@@ -424,6 +428,9 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
     log_context
         .metadata
         .insert("start_walking".into(), options.start_walking.to_string());
+    if options.dry_run {
+        log_context.metadata.insert("dry_run".into(), "true".into());
+    }
     let (mut log_tx, logger) = match &options.log_path {
         Some(path) => {
             let (mut tx, logger) = crate::telemetry::log::start(
@@ -526,7 +533,11 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
             phase: out.status.phase,
         });
         for (i, cmd) in commands.iter_mut().enumerate() {
-            *cmd = to_a1(ids[i], &out.commands[slot_of[i]]);
+            *cmd = if options.dry_run {
+                Command::damping(ids[i], 0.0)
+            } else {
+                to_a1(ids[i], &out.commands[slot_of[i]])
+            };
         }
         sample.fill(
             &input,

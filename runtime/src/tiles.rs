@@ -7,8 +7,8 @@
 //!          ─ /joints (motor angles)      ├─▶ one complete step ─▶ samples nearest τ = k/(n−1)
 //!          ─ /estimator (pitch)          ┘      ─▶ q (pitch, model joint angles) ─▶ forward kinematics
 //! ```
-//! Joint angles are converted from the motor side to the model side with each leg motor's
-//! `direction` and `offset_rad` from the attached config; the torso pitch is the controller's
+//! Joint angles are converted from the motor side to the model side with each leg joint's
+//! `[calibration]` (direction, zero offset, gear ratio) from the attached config; the torso pitch is the controller's
 //! estimate (what the robot believed). Positions are relative to the stance foot, which stays
 //! put during a step. The step drawn is the middle one of the complete steps in the log (a
 //! step whose start and end are both in the log).

@@ -2,6 +2,8 @@
 //! that calls the libraries, and (in `report`) the `Display` types of what it prints.
 
 pub(crate) mod bench;
+pub(crate) mod calibrate;
+pub(crate) mod can;
 pub(crate) mod codesign;
 pub(crate) mod logs;
 pub(crate) mod model;

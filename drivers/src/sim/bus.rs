@@ -35,7 +35,7 @@ use crate::a1::{self, Command, ErrorFlags, Frame, MotorId, Reply, Special};
 use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation};
 use crate::frame_log::{FrameDirection, FrameLog, LoggedFrame};
 use crate::imu::{Imu, ImuError, ImuSample};
-use crate::sim::firmware::{A1Model, Firmware, SimMotor, TickPeriod};
+use crate::sim::firmware::{A1Model, EncoderMount, Firmware, SimMotor, TickPeriod};
 use crate::sim::plant::JointPlant;
 use crate::sim::wire::{
     corrupt, Corruption, Direction, TapEntry, WireFault, WireFaults, WireStats, WireTap,
@@ -223,6 +223,22 @@ impl<P: JointPlant> SimBus<P> {
         match self.firmware.iter_mut().find(|f| f.motor.spec.id == motor) {
             Some(f) => {
                 f.temperature_c = temperature_c;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Fault injection for calibration: mount `motor` on its joint as `mount` says (flipped,
+    /// its zero elsewhere). Returns false if there is no such simulated motor or the mount is
+    /// not a direction of ±1 and a finite angle.
+    pub fn set_encoder_mount(&mut self, motor: MotorId, mount: EncoderMount) -> bool {
+        if !(mount.direction.abs() == 1.0 && mount.joint_rad_at_zero.is_finite()) {
+            return false;
+        }
+        match self.firmware.iter_mut().find(|f| f.motor.spec.id == motor) {
+            Some(f) => {
+                f.mount = mount;
                 true
             }
             None => false,

@@ -25,6 +25,10 @@
 //!   obey commands (damping until the first one arrives); *disable* returns to damping at
 //!   once; *set zero* declares the present position zero. Malformed frames are ignored
 //!   without reply, like real firmware.
+//! * Mounting ([`EncoderMount`], a fault for calibration tests): the motor may be mounted on its
+//!   joint the other way round and with its zero elsewhere: it reads and commands the motor
+//!   angle `m = direction · (q − joint_rad_at_zero)` and drives the joint with
+//!   `direction · τ_m`. Default: `m = q` (how the runtime's identity calibration sees it).
 
 use crate::a1::{
     self, decode_host_frame, encode_reply, Command, ErrorFlags, Frame, HostFrame, Mode, Reply,
@@ -137,6 +141,25 @@ impl A1Model {
     }
 }
 
+/// How a simulated motor sits on its joint: `m = direction · (q − joint_rad_at_zero)` (motor
+/// angle `m`, joint angle `q`), the joint torque `direction · τ_m`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EncoderMount {
+    /// +1, or −1 for a motor mounted the other way round.
+    pub direction: f64,
+    /// The joint angle at which the motor reads zero \[rad\].
+    pub joint_rad_at_zero: f64,
+}
+
+impl Default for EncoderMount {
+    fn default() -> Self {
+        Self {
+            direction: 1.0,
+            joint_rad_at_zero: 0.0,
+        }
+    }
+}
+
 /// A simulated motor: where it is and which joint it drives.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SimMotor {
@@ -154,6 +177,7 @@ pub(super) struct Firmware {
     inbox: Option<Command>,
     pub(super) silent: bool,
     zero_offset_rad: f64,
+    pub(super) mount: EncoderMount,
     prev_counts: i64,
     q_abs_rad: f64,
     dq_filtered_rad_s: f64,
@@ -173,6 +197,7 @@ impl Firmware {
             inbox: None,
             silent: false,
             zero_offset_rad: 0.0,
+            mount: EncoderMount::default(),
             prev_counts: counts,
             q_abs_rad: counts as f64 * model.joint_rad_per_count(),
             dq_filtered_rad_s: 0.0,
@@ -208,7 +233,7 @@ impl Firmware {
                 }
                 Special::Enable => {}
                 Special::Disable => self.disable(model),
-                Special::SetZero => self.zero_offset_rad = self.q_abs_rad,
+                Special::SetZero => self.zero_offset_rad = self.motor_abs_rad(),
             },
             _ => return None,
         }
@@ -231,8 +256,8 @@ impl Firmware {
             motor: self.motor.spec.id,
             mode: self.mode(),
             enabled: self.enabled,
-            q_rad: self.q_abs_rad - self.zero_offset_rad,
-            dq_rad_s: self.dq_filtered_rad_s,
+            q_rad: self.motor_abs_rad() - self.zero_offset_rad,
+            dq_rad_s: self.mount.direction * self.dq_filtered_rad_s,
             tau_nm: self.tau_nm,
             temperature_c: self.temperature_c,
             errors,
@@ -258,8 +283,11 @@ impl Firmware {
         self.dq_filtered_rad_s +=
             period.velocity_filter_gain * (raw_velocity - self.dq_filtered_rad_s);
 
-        let q_hat = self.q_abs_rad - self.zero_offset_rad;
-        let dq_hat = self.dq_filtered_rad_s;
+        // Motor side (the mount): the PD, the reply and the torque limit see the motor's angle.
+        let direction = self.mount.direction;
+        let q_hat = self.motor_abs_rad() - self.zero_offset_rad;
+        let dq_hat = direction * self.dq_filtered_rad_s;
+        let dq_rad_s = direction * dq_rad_s;
         let c = &self.active;
         let request = if self.overheated {
             0.0
@@ -285,7 +313,12 @@ impl Firmware {
         } else if self.temperature_c < model.recover_temperature_c {
             self.overheated = false;
         }
-        self.tau_nm
+        direction * self.tau_nm
+    }
+
+    /// The motor's angle before any *set zero*: the joint angle through the mount \[rad\].
+    fn motor_abs_rad(&self) -> f64 {
+        self.mount.direction * (self.q_abs_rad - self.mount.joint_rad_at_zero)
     }
 
     pub(super) fn latch(&mut self) {

@@ -89,6 +89,12 @@ pub struct Controller {
     damping_kd: f64,
     ramp_min_duration_s: f64,
     ramp_max_speed_rad_s: f64,
+    /// The gains ramp's duration after Start, s (`bringup.gains_ramp_s`; 0: none).
+    gains_ramp_s: f64,
+    /// When the last Start came (the gains ramp counts from it); `None`: gains at full.
+    gains_on_t_s: Option<f64>,
+    /// The gains ramp's factor of this tick, 0..=1 (1 exactly when no ramp is under way).
+    gain_scale: f64,
     switch_min_phase: f64,
     touchdown_height_m: f64,
     touchdown_max_descent_mps: f64,
@@ -248,6 +254,9 @@ impl Controller {
             damping_kd: config.gains.damping_kd_nm_s_per_rad,
             ramp_min_duration_s: config.ramp.min_duration_s,
             ramp_max_speed_rad_s: config.ramp.max_speed_rad_s,
+            gains_ramp_s: config.bringup.gains_ramp_s,
+            gains_on_t_s: None,
+            gain_scale: 1.0,
             switch_min_phase: config.walk.switch_min_phase,
             touchdown_height_m: config.walk.touchdown_height_m,
             touchdown_max_descent_mps: config.walk.touchdown_max_descent_mps,
@@ -400,6 +409,7 @@ impl Controller {
             }
             (OperatorCommand::Damp, _) => self.enter(S::Damping, status),
             (OperatorCommand::Start, S::Idle) => {
+                self.gains_on_t_s = Some(t_s);
                 self.stance = self.gait.first_stance;
                 self.stand_hold = None;
                 self.begin_ramp(t_s);
@@ -446,7 +456,7 @@ impl Controller {
         let mut leg_dq = [0.0; LEG_SLOTS];
         for k in 0..LEG_SLOTS {
             leg_q[k] = self.to_model(k, self.motors[k].q_rad);
-            leg_dq[k] = self.layout.direction[k] * self.motors[k].dq_rad_s;
+            leg_dq[k] = self.layout.model_rate_rad_s(k, self.motors[k].dq_rad_s);
         }
         // Estimator.
         // An implausible sample (a glitch; safety counts them) is not integrated.
@@ -502,6 +512,14 @@ impl Controller {
         if self.state == ControlState::Ramp && t - self.ramp.start_t_s >= self.ramp.duration_s {
             self.enter(ControlState::Stand, status);
         }
+
+        // The gains ramp in after Start (linearly; exactly 1 once done or without a ramp).
+        self.gain_scale = match self.gains_on_t_s {
+            Some(t0) if self.gains_ramp_s > 0.0 && t - t0 < self.gains_ramp_s => {
+                ((t - t0) / self.gains_ramp_s).clamp(0.0, 1.0)
+            }
+            _ => 1.0,
+        };
 
         // Commands.
         let mut y_des = [0.0; OUTPUTS];

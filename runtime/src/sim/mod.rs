@@ -3,9 +3,11 @@
 //! their injection into the simulated robot ([`inject`]), and what a run is told in time
 //! ([`treadmill`]: the belt's speed profile, pushes, scripted operator commands); the report of
 //! a run ([`report`]) and the treadmill scenarios of the bench and the acceptance tests
-//! ([`scenarios`]).
+//! ([`scenarios`]); the robot hung on the boom for bring-up ([`hung`]: calibration, pre-flight,
+//! dry run).
 
 pub mod faults;
+pub mod hung;
 pub mod inject;
 pub mod report;
 pub mod run;

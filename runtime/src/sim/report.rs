@@ -84,6 +84,8 @@ pub struct SimWalkReport {
     pub faults_started: u64,
     /// What the simulated CAN wire did.
     pub wire: WireStats,
+    /// The pre-flight checks, when the run made them ([`crate::bringup::preflight()`]).
+    pub preflight: Option<crate::bringup::PreflightReport>,
 }
 
 impl SimWalkReport {
@@ -128,6 +130,7 @@ impl SimWalkReport {
             faults_started,
             wire,
             summary,
+            preflight: None,
         };
         if let Some(f) = fall {
             report.trace.retain(|s| s.t_s <= f.t_s);
@@ -197,6 +200,9 @@ fn granted(r: Option<core::result::Result<(), i32>>) -> String {
 impl std::fmt::Display for SimWalkReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let s = &self.summary;
+        if let Some(p) = &self.preflight {
+            write!(f, "{p}")?;
+        }
         let belt = if self.belt_speed_end_mps == self.belt_speed_mps {
             format!("{:.3} m/s", self.belt_speed_mps)
         } else {

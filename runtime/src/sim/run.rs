@@ -40,6 +40,7 @@ use crate::backend::Backend;
 use crate::control::OperatorCommand;
 use crate::rt_loop::{LoopOptions, MonotonicClock};
 use crate::sim::faults::{Fault, FaultProfile};
+pub use crate::sim::hung::joint_bench_backend;
 use crate::sim::inject::{FaultClock, FaultySim};
 pub use crate::sim::report::{SimWalkReport, StepRecord, TruthSample};
 use crate::sim::treadmill::BeltProfile;
@@ -89,6 +90,13 @@ pub struct SimWalkOptions {
     pub faults: Option<FaultProfile>,
     /// End the run this long after a safety trip (`None`: run the whole duration).
     pub stop_after_trip_s: Option<f64>,
+    /// How each leg motor sits on its joint, in leg slot order (default: as the model's joint,
+    /// what the identity calibration expects); a robot to calibrate (`adam calibrate`).
+    pub encoder_mounts: [drivers::sim::firmware::EncoderMount; crate::slots::LEG_SLOTS],
+    /// Run the pre-flight checks before the loop, on the robot hung on the boom
+    /// ([`crate::sim::hung::preflight_hung`]): for a run that starts from Idle
+    /// (`SimStart::Stand`); its report lands in the run's report.
+    pub preflight: bool,
 }
 
 impl SimWalkOptions {
@@ -109,6 +117,8 @@ impl SimWalkOptions {
             real_time: false,
             faults: None,
             stop_after_trip_s: None,
+            encoder_mounts: Default::default(),
+            preflight: false,
         }
     }
 }
@@ -183,14 +193,6 @@ pub fn sim_backend(setup: &Setup, options: &SimWalkOptions) -> Result<SimBus<Rob
     sim.attach_imu(options.imu_noise, options.seed);
     let mut motors = Vec::with_capacity(setup.config.leg_motors.len());
     for (k, m) in setup.config.leg_motors.iter().enumerate() {
-        // The simulated motors are mounted like the model joints: no sign flip, no offset.
-        if m.direction != 1.0 || m.offset_rad != 0.0 {
-            return Err(invalid(
-                &format!("leg_motors[{k}].direction/offset_rad"),
-                format!("{} / {}", m.direction, m.offset_rad),
-                "the simulated robot has direction 1 and offset 0",
-            ));
-        }
         let side = if m.joint.starts_with("left_") {
             Side::Left
         } else {
@@ -214,9 +216,11 @@ pub fn sim_backend(setup: &Setup, options: &SimWalkOptions) -> Result<SimBus<Rob
         model: A1Model::default(),
         seed: options.seed,
     };
-    SimBus::new(bus_config, sim).map_err(|e| RuntimeError::Gait {
+    let mut bus = SimBus::new(bus_config, sim).map_err(|e| RuntimeError::Gait {
         reason: format!("simulated bus: {e}"),
-    })
+    })?;
+    crate::sim::hung::mount_sim_motors(&mut bus, setup, &options.encoder_mounts)?;
+    Ok(bus)
 }
 
 fn sim_error(e: &drivers::sim::robot::RobotSimError) -> RuntimeError {
@@ -254,6 +258,15 @@ pub fn walk_with_operator(
         _ => setup,
     };
     let bus = sim_backend(setup, options)?;
+    let preflight = if options.preflight {
+        let pitch_rad = bus.plant().torso_pitch_rad();
+        let report =
+            crate::sim::hung::preflight_hung(setup, &bus, pitch_rad, &options.encoder_mounts)?;
+        report.refuse()?;
+        Some(report)
+    } else {
+        None
+    };
     let belt_speed_mps = bus.plant().belt_speed_mps();
     let x0_m = bus.plant().base_position_m()[0];
     let stance_x0_m = bus.plant().foot_position_m(setup.gait.stance_leg)[0];
@@ -308,7 +321,7 @@ pub fn walk_with_operator(
     let trace = std::mem::take(&mut backend.trace);
     let faults_started = backend.started;
     let wire = backend.bus.wire_stats();
-    Ok(SimWalkReport::measure(
+    let mut report = SimWalkReport::measure(
         summary,
         backend.bus.plant(),
         options.duration_s,
@@ -319,7 +332,9 @@ pub fn walk_with_operator(
         faults_started,
         wire,
         trace,
-    ))
+    );
+    report.preflight = preflight;
+    Ok(report)
 }
 
 /// The belt's speed as an operator tells it to speed control: at the start, at every pair of
@@ -531,51 +546,4 @@ pub fn soak(
         let _ = std::fs::remove_file(&temp_log);
     }
     Ok(report)
-}
-
-/// The leg motors of `setup` on four free joints (inertia 0.05 kg·m², damping 0.1 N·m·s/rad, no
-/// robot dynamics) starting at `start_rad`, behind the simulated A1 firmware (seed 7), paired
-/// with a static IMU: a backend for the state machine and loop tests without a robot.
-pub fn joint_bench_backend(
-    setup: &Setup,
-    start_rad: &[f64],
-    imu: crate::backend::StaticImu,
-) -> Result<
-    crate::backend::WithImu<
-        SimBus<drivers::sim::plant::InertiaDampingPlant>,
-        crate::backend::StaticImu,
-    >,
-> {
-    use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
-    let joint = RigidJoint {
-        inertia_kg_m2: 0.05,
-        damping_nm_s_per_rad: 0.1,
-        load_torque_nm: 0.0,
-    };
-    let invalid = |reason: String| RuntimeError::Gait { reason };
-    let n = setup.config.leg_motors.len();
-    let mut plant = InertiaDampingPlant::new(vec![joint; n])
-        .ok_or_else(|| invalid("joint bench: invalid plant".into()))?;
-    for (j, q) in start_rad.iter().take(n).enumerate() {
-        plant.set_state(j, *q, 0.0);
-    }
-    let mut motors = Vec::with_capacity(n);
-    for (joint, m) in setup.config.leg_motors.iter().enumerate() {
-        motors.push(SimMotor {
-            spec: m.spec(&format!("leg_motors[{joint}]"))?,
-            joint,
-        });
-    }
-    let config = SimConfig {
-        control_rate_hz: setup.config.loop_.rate_hz,
-        bitrate_bps: setup.config.loop_.bitrate_bps,
-        bus_count: setup.config.loop_.bus_count,
-        motors,
-        model: A1Model::default(),
-        seed: 7,
-    };
-    Ok(crate::backend::WithImu {
-        bus: SimBus::new(config, plant).map_err(|e| invalid(format!("joint bench bus: {e}")))?,
-        imu,
-    })
 }

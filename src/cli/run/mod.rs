@@ -71,6 +71,11 @@ pub(crate) struct RunArgs {
     /// delay-1, soak, rough) or a TOML file; seeded by --seed.
     #[arg(long)]
     faults: Option<String>,
+    /// Run the whole loop but send every motor zero torque, logging what the controller would
+    /// have sent (sim: the robot hung on the boom, after the pre-flight; Start at 0 s, then
+    /// --script).
+    #[arg(long)]
+    dry_run: bool,
 }
 
 /// Arguments of `adam soak`.
@@ -314,6 +319,37 @@ fn sim_walk(setup: &runtime::Setup, options: &runtime::sim::run::SimWalkOptions)
     Ok(())
 }
 
+/// `adam run --backend sim --dry-run`: the pre-flight, then the loop at zero torque on the
+/// simulated robot hung on the boom.
+fn sim_dry_run(
+    setup: &runtime::Setup,
+    duration_s: f64,
+    script: &[(f64, runtime::control::OperatorCommand)],
+    log: Option<PathBuf>,
+) -> Result<()> {
+    let dry = runtime::sim::hung::dry_run_sim(setup, duration_s, script, log.clone())?;
+    print!("{}", dry.preflight);
+    println!("{}", RobotRunReport::of(&dry.summary));
+    println!(
+        "dry run: every command sent was zero torque; the legs moved {:.2e} rad at most (they \
+         hung {} rad off the start pose the controller ramped to)",
+        dry.largest_motion_rad,
+        runtime::sim::hung::DRY_RUN_START_OFFSET_RAD
+    );
+    if let (Some(path), Some(stats)) = (&log, &dry.summary.log) {
+        let counts = LogCounts {
+            records: stats.records,
+            messages: stats.messages,
+            dropped: stats.dropped,
+        };
+        println!(
+            "log: {} ({counts}): the commands the controller would have sent",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 /// `adam demo`: the shipped gait, 30 s on the simulated treadmill, logged under `logs/`.
 pub(crate) fn demo(args: &DemoArgs) -> Result<()> {
     let gait = shipped::input(std::path::Path::new(runtime::DEFAULT_GAIT));
@@ -371,10 +407,41 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         keyboard,
         can_interfaces,
         faults,
+        dry_run,
     } = args;
     let (gait, config) = (shipped::input(&gait), shipped::input(&config));
     let setup = runtime::Setup::load(&config, &gait)?;
     match backend {
+        Backend::Sim if dry_run => {
+            let ignored: Vec<&str> = [
+                ("--belt", belt.is_some()),
+                ("--belt-acceleration", belt_acceleration.is_some()),
+                ("--push", !push.is_empty()),
+                ("--start", start.is_some()),
+                ("--seed", seed.is_some()),
+                ("--real-time", real_time),
+                ("--faults", faults.is_some()),
+            ]
+            .iter()
+            .filter_map(|(f, set)| set.then_some(*f))
+            .collect();
+            if !ignored.is_empty() {
+                bail!(
+                    "{} not used by a --dry-run (the robot hangs on the boom): remove {}",
+                    ignored.join(", "),
+                    if ignored.len() == 1 { "it" } else { "them" }
+                );
+            }
+            let script = script
+                .as_deref()
+                .map(|s| runtime::sim::treadmill::parse_script(s, "--script"))
+                .transpose()?
+                .unwrap_or_default();
+            if let Some(path) = &log {
+                writable(path, force)?;
+            }
+            sim_dry_run(&setup, duration, &script, log)
+        }
         Backend::Sim => {
             let mut faults = faults
                 .as_deref()
@@ -425,6 +492,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
                 Some(Start::Stand) => runtime::sim::run::SimStart::Stand,
                 Some(Start::Walk) | None => runtime::sim::run::SimStart::Walk,
             };
+            // From Stand the gains come on at Start: the pre-flight checks the robot first.
+            options.preflight = options.start == runtime::sim::run::SimStart::Stand;
             options.script = script;
             options.log_path = log;
             options.seed = seed.unwrap_or(1);

@@ -20,13 +20,12 @@ impl Controller {
         let stance = side_index(self.stance);
         for i in 0..OUTPUTS {
             let slot = self.gait.out_slot[stance][i];
-            let dir = self.layout.direction[slot];
             let ff = self.feedforward_nm[i] + self.plan_feedforward_scale * eval.feedforward_nm[i];
             commands[slot] = self.pd(
                 slot,
                 self.to_motor(slot, eval.y[i]),
-                dir * eval.dy[i],
-                dir * ff,
+                self.layout.motor_rate_rad_s(slot, eval.dy[i]),
+                self.layout.motor_torque_nm(slot, ff),
             );
         }
         self.hold_commands(commands);
@@ -178,19 +177,27 @@ impl Controller {
         launch.leg_q = q_des;
         self.launch = Some(launch);
         for k in 0..LEG_SLOTS {
-            let dir = self.layout.direction[k];
-            commands[k] = self.pd(k, self.to_motor(k, q_des[k]), dir * dq_des[k], dir * ff[k]);
+            commands[k] = self.pd(
+                k,
+                self.to_motor(k, q_des[k]),
+                self.layout.motor_rate_rad_s(k, dq_des[k]),
+                self.layout.motor_torque_nm(k, ff[k]),
+            );
         }
         self.hold_commands(commands);
     }
 
-    /// PD command for a slot with the slot's gains (leg gains or held gains).
+    /// PD command for a slot with the slot's gains (leg gains, joint side, scaled to the motor
+    /// side by the calibration's gear ratio; or held gains), times the gains ramp's factor.
+    /// `q_des`, `dq_des` and `tau_ff` are motor side.
     pub(super) fn pd(&self, slot: usize, q_des: f64, dq_des: f64, tau_ff: f64) -> JointCommand {
         let (kp, kd) = if slot < LEG_SLOTS {
             (self.kp[slot], self.kd[slot])
         } else {
             (self.layout.held_kp[slot], self.layout.held_kd[slot])
         };
+        let scale = self.gain_scale * self.layout.gain_factor(slot);
+        let (kp, kd) = (kp * scale, kd * scale);
         JointCommand {
             mode: CommandMode::Pd,
             q_des_rad: q_des,
