@@ -28,20 +28,55 @@
 //! The phase itself is measured with the new gait's θ⁺ and θ⁻; the phase observer keeps its
 //! rate of stance-leg angle (τ̇ rescaled by the ratio of the two gaits' θ spans).
 //!
-//! # The law's gains, and what was measured
-//! One update per step, on the Poincaré section. Measured in the simulator (the test library of
-//! `runtime/tests/fixtures/library/`: 0.8 s steps at 0.15–0.35 m/s, |λ|max 0.83–0.94 by
-//! `adam gait check`), walking each library gait open loop on a belt at its speed (seed 1,
-//! 30 s): planned 0.20 → walked 0.199 m/s, 0.25 → 0.294, 0.30 → 0.385, 0.35 → 0.407; the
-//! 0.15 m/s gait stalls (step timeout). The walked speed thus responds to the library speed
-//! with a steady-state sensitivity ∂v/∂σ ≈ 1.8 around 0.25 m/s, reached over several steps
-//! (the orbits converge at |λ| ≈ 0.85–0.9 per step), and a step's speed scatters by
-//! ±0.03 m/s between left and right steps — hence the error over a stride. With that gain and
-//! lag, the loop is kept slow: σ moves at most `max_change_per_step_mps` (0.02 m/s) per
-//! step, k_s = 0.5, k_i = 0.1 (the integral removes the planned-vs-walked bias), k_p = 0.3 /s.
-//! On a 0.25 m/s belt (60 s, seeds 1 and 2) the walk holds the belt speed within 0.6 % and
-//! stays within 0.15 m of the centre after 10 s; the loop still oscillates slowly (period
-//! ≈ 12 s), so the ±0.10 m of the acceptance is not met yet (`runtime/tests/speed_sim.rs`).
+//! # The law's gains
+//! One update per step, on the Poincaré section: σ moves at most `max_change_per_step_mps`
+//! (0.02 m/s) per step, k_s = 0.5, k_i = 0.1 (the integral removes the planned-vs-walked
+//! bias), k_p = 0.3 /s. The error is taken over a stride (the last two steps): a step's speed
+//! scatters by ±0.03 m/s between left and right steps.
+//!
+//! # Why the ends and the belt step fail (measured in the simulator, 2026-12-05)
+//! Measured on the simulated ADAM with 60 s runs, seeds 1–5 (`adam bench treadmill`), and
+//! single runs read back from the `/speed` channel; the library gaits up to 0.30 m/s are the
+//! same in the library shipped before and now.
+//!
+//! 1. **The library's speed does not set the walked speed; it nudges a slow mode.** Each
+//!    library gait walked alone (no speed control, an endless belt at its speed, seed 1) walks,
+//!    between 25 and 40 s: 0.15 → 0.148 m/s, 0.175 → 0.177, 0.20 → 0.200, 0.225 → 0.276,
+//!    0.25 → 0.305, 0.275 → 0.326, 0.30 → 0.343 m/s (the gaits from 0.225 m/s up walk
+//!    0.05 m/s faster than planned: a steady-state gain ∂v/∂σ ≈ 2.5 between 0.20 and 0.25 m/s
+//!    and ≈ 1 elsewhere). It gets there slowly: the 0.25 m/s gait speeds up from 0.248 to
+//!    0.316 m/s over 20 s and the 0.225 m/s gait from 0.227 to 0.276 m/s, step by step, where
+//!    the planner's Poincaré map has |λ| ≈ 0.88 per step. The closed loop on the simulated
+//!    A1s (PD at 150 N·m/rad, the bus latency) thus walks orbits other than the planned ones,
+//!    and its speed mode is nearly neutral (tens of steps). Once on a fast orbit the robot
+//!    stays there: on a 0.20 m/s belt (seed 2, a trial library whose slowest gait is 0.135 m
+//!    in 0.9 s), with σ held at that slowest gait for 15 s, it walked 0.22–0.25 m/s and ran
+//!    off the front of the belt, where that gait alone walks 0.136 m/s. The regulator's only lever, σ, cannot pull it back within the belt's ±0.8 m.
+//!    Inverting the measured steady-state map in the regulator (aiming at a walked speed and
+//!    walking the gait M⁻¹ of it) was tried and did not help (seeds 1–5: 3 of 30 acceptance
+//!    runs passed against 2; on a 0.20 m/s belt one fall where there was none; three belt
+//!    steps off the front against one): it is the lag and the fast orbits, not the gain.
+//! 2. **The slow end stalls.** The 0.15 m/s gait (0.15 m in 1.0 s, both step bounds active)
+//!    has the least kinetic energy over the stance leg; a slower step after a gait switch
+//!    (0.109–0.13 m/s) is followed by one that does not get over the stance foot: the step
+//!    timeout trips. With shorter, quicker slow gaits (0.135 m in 0.9 s) the stalls went away
+//!    but the robot ran off the front (item 1) instead.
+//! 3. **The fast end crossed a jump in the library.** Planned with Table I's steps up to
+//!    0.35 m, the library jumped between 0.300 and 0.325 m/s from 0.20 m / 0.67 s steps to
+//!    0.26 m / 0.79 s ones; on a 0.35 m/s belt the regulator holds σ ≈ 0.30 (the gaits walk
+//!    faster than planned), right at the jump, and the interpolated gaits walked erratic steps
+//!    (0.27, 0.44, 0.30, 0.57 m/s in a row) and stalled in all five seeds. The library is now
+//!    planned with steps of at most 0.22 m (`configs/planner/adam_library.toml`): a continuous
+//!    family, and no trip at 0.35 m/s (docs/gait-library.md, "Step bounds").
+//! 4. **The belt step** combines 1 and 3: up to 0.30 m/s the walk overshoots into the fast
+//!    orbits; back to 0.20 m/s it stays fast while the position loop drives σ to the bottom
+//!    of the library, and the robot walks off the front of the belt or stalls there.
+//!
+//! What would fix it lies outside this module: a lever on the energy of each step (the step
+//! length at touchdown, as the braking step of a Stop does: a longer step loses more at the
+//! impact) or a closed loop whose orbits are the planned ones (the tracking gains, the
+//! feed-forward), so that the library's speed is the walked speed.
+//!
 //! The gains are the config's `[speed]` section ([`crate::config::SpeedConfig`]).
 
 use super::double_support::Geometry;
