@@ -1,14 +1,17 @@
 //! The runtime config (`configs/runtime/*.toml`): loop rate, buses, motors, gains, ramp,
 //! safety limits, held joint positions, logging and telemetry, and the treadmill's belt speed
 //! range ([`TreadmillConfig`]: every belt speed a run asks for is checked against it), and the
-//! treadmill speed control's gains ([`SpeedConfig`]).
+//! treadmill speed control's gains ([`SpeedConfig`]), and the torso IMU's mounting and rates
+//! ([`ImuConfig`]).
 //!
 //! Checked data: `deny_unknown_fields` everywhere, a `schema_version`, and [`RuntimeConfig::validate`]
 //! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
 //! [`drivers::timing::validate`] refuses, naming the file, the field and the value.
 
+mod imu;
 mod speed;
 
+pub use imu::{ImuConfig, VN100_BAUD_RATES_BPS};
 pub use speed::{PositionSource, SpeedConfig};
 
 use crate::slots::{SlotLayout, LEG_SLOTS, MAX_HELD, SLOTS};
@@ -356,6 +359,9 @@ pub struct RuntimeConfig {
     /// Speed control on the treadmill (absent: [`SpeedConfig::default`]).
     #[serde(default)]
     pub speed: SpeedConfig,
+    /// The torso IMU on the robot (absent: [`ImuConfig::default`]).
+    #[serde(default)]
+    pub imu: ImuConfig,
 }
 
 /// The URDF joint of each leg slot.
@@ -624,6 +630,7 @@ impl RuntimeConfig {
             e.touchdown_pitch_sigma_rad,
         )?;
         self.speed.validate(origin)?;
+        self.imu.validate(origin)?;
         let [lo, hi] = self.treadmill.belt_speed_range_mps;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
             return Err(bad(

@@ -1,0 +1,132 @@
+//! The real VN-100 driver over a real tty against `adam emulate imu --pty` in another process:
+//! 800 Hz for 10 s with garbage between frames, dropped and changed bytes. Every intact frame is
+//! received, every spoilt one is counted missed, none is mistaken for data.
+
+use drivers::imu::Imu;
+use drivers::vn100::port::Vn100;
+use drivers::vn100::Vn100Options;
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+/// The number after `name ` in the emulator's count line.
+fn count(line: &str, name: &str) -> u64 {
+    let at = line
+        .find(name)
+        .map(|i| i + name.len())
+        .unwrap_or_else(|| panic!("`{name}` in {line}"));
+    line[at..]
+        .trim_start()
+        .split(|c: char| !c.is_ascii_digit())
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("a count after `{name}` in {line}"))
+}
+
+/// The emulator's process, killed if the test ends early (a failed assertion).
+struct Emulator(std::process::Child);
+
+impl Drop for Emulator {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn the_driver_over_a_tty_takes_every_intact_frame_of_ten_seconds_at_800_hz() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_adam"))
+        .args([
+            "emulate",
+            "imu",
+            "--pty",
+            "--duration",
+            "10s",
+            "--garbage",
+            "0.03",
+            "--drop",
+            "0.01",
+            "--flip",
+            "0.01",
+            "--seed",
+            "5",
+            "--sway-deg",
+            "2",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("adam emulate imu");
+    let stdout = child.stdout.take().expect("stdout");
+    let mut child = Emulator(child);
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let first = rx
+        .recv_timeout(Duration::from_secs(20))
+        .expect("the pty line");
+    let path = first
+        .strip_prefix("pty: ")
+        .unwrap_or_else(|| panic!("{first}"))
+        .to_string();
+    let mut driver = Vn100::open(&path, &Vn100Options::default()).expect("configured");
+    let mut sent_line = None;
+    let mut last_new = Instant::now();
+    let mut samples = Vec::new();
+    let started = Instant::now();
+    while started.elapsed() < Duration::from_secs(60) {
+        if driver.poll() > 0 {
+            last_new = Instant::now();
+            if let Some(s) = driver.read_at(started.elapsed().as_secs_f64()) {
+                samples.push(s);
+            }
+        }
+        while let Ok(line) = rx.try_recv() {
+            if line.starts_with("sent at") {
+                sent_line = Some(line);
+            }
+        }
+        if sent_line.is_some() && last_new.elapsed() > Duration::from_millis(300) {
+            break;
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    }
+    let _ = child.0.wait();
+    let sent = sent_line.expect("the emulator's counts");
+    let got = driver.stats();
+    println!("emulator: {sent}\ndriver: {got:?}");
+    let frames = count(&sent, "frames sent");
+    let intact = count(&sent, "intact");
+    let spoilt = count(&sent, "dropped byte") + count(&sent, "changed byte");
+    assert!(sent.starts_with("sent at 800 Hz"), "{sent}");
+    assert_eq!(frames, 8000);
+    assert!(
+        spoilt > 100 && count(&sent, "garbage bytes") > 3000,
+        "{sent}"
+    );
+    // All valid frames received, every spoilt one counted, none mistaken for data.
+    assert_eq!(got.samples, intact);
+    assert_eq!(got.frames_missed, spoilt);
+    assert_eq!(got.implausible, 0);
+    assert_eq!(got.wrong_fields, 0);
+    assert_eq!(got.read_errors, 0);
+    assert!(got.parser.crc_failures + got.parser.bad_headers > 0);
+    // The torso sways ±2° about 3°: the gyro sees ±2°·2π·1 Hz ≈ ±0.22 rad/s, pitch rate
+    // about the robot's +y (the default mounting maps it from the VN-100's −y).
+    let peak = samples
+        .iter()
+        .map(|s| s.gyro_pitch_rad_s)
+        .fold(0.0f64, |a, g| a.max(g));
+    assert!((0.17..0.3).contains(&peak), "peak pitch rate {peak}");
+    let mean_z = samples.iter().map(|s| s.accel_z_mps2).sum::<f64>() / samples.len() as f64;
+    assert!(
+        (mean_z - 9.81 * 3f64.to_radians().cos()).abs() < 0.05,
+        "{mean_z}"
+    );
+}
