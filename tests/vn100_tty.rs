@@ -130,3 +130,59 @@ fn the_driver_over_a_tty_takes_every_intact_frame_of_ten_seconds_at_800_hz() {
         "{mean_z}"
     );
 }
+
+#[test]
+fn run_on_a_machine_without_the_robot_names_the_can_interface_and_the_serial_port_once() {
+    let out = Command::new(env!("CARGO_BIN_EXE_adam"))
+        .args([
+            "run",
+            "--backend",
+            "can",
+            "--imu",
+            "vn100:/dev/no-such-vn100",
+            "--duration",
+            "1s",
+        ])
+        .output()
+        .expect("adam run");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("cannot open CAN interface `can0`"), "{err}");
+    assert!(
+        err.contains("cannot open the VN-100's serial port `/dev/no-such-vn100`"),
+        "{err}"
+    );
+    assert_eq!(err.matches("can0").count(), 1, "{err}");
+    assert_eq!(err.matches("/dev/no-such-vn100").count(), 1, "{err}");
+}
+
+#[test]
+fn the_emulated_stream_written_to_a_file_parses_back_frame_for_frame() {
+    let dir = std::env::temp_dir().join(format!("adam-vn100-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    let path = dir.join("vn100.bin");
+    let _ = std::fs::remove_file(&path);
+    let out = Command::new(env!("CARGO_BIN_EXE_adam"))
+        .args(["emulate", "imu", "--duration", "2s", "--rate-hz", "400"])
+        .args(["--garbage", "0.1", "--flip", "0.05", "--out"])
+        .arg(&path)
+        .output()
+        .expect("adam emulate imu --out");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&path).expect("the stream");
+    let mut parser = drivers::vn100::frame::Parser::new();
+    let mut times = Vec::new();
+    parser.feed(&bytes, |m| times.push(m.time_startup_ns));
+    assert_eq!(times.len() as u64, count(&text, "intact"), "{text}");
+    assert_eq!(count(&text, "frames sent"), 800);
+    // 400 Hz: every received time stamp a whole number of 2.5 ms periods after the first.
+    assert!(times
+        .windows(2)
+        .all(|w| w[1] > w[0] && (w[1] - w[0]) % 2_500_000 == 0));
+    let _ = std::fs::remove_dir_all(&dir);
+}
