@@ -3,9 +3,9 @@
 //!
 //! This file parses and dispatches; each group of commands lives in its own module under
 //! [`cli`]: `run` (run, demo, soak), `plan` (plan, gait check), `codesign`, `bench`, `logs`
-//! (logs, replay, plot), `op` and `model` (model, generate-urdf). What a command prints at
-//! length comes from `Display` types in the group's `report` module; `cli::plots` draws the
-//! figures and `cli::paths` derives file paths.
+//! (logs, replay, plot), `op`, `model` (model, generate-urdf) and `emulate` (emulated
+//! hardware). What a command prints at length comes from `Display` types in the group's
+//! `report` module; `cli::plots` draws the figures and `cli::paths` derives file paths.
 //!
 //! **From any folder.** The shipped robots, gaits and configs are found from any working
 //! directory (`cli::shipped`): a relative `configs/…` input missing from the working directory
@@ -21,7 +21,7 @@ use cli::bench::BenchWhat;
 use cli::codesign::CodesignStudy;
 use cli::logs::{LogsCommand, PlotWhat};
 use cli::plan::GaitCommand;
-use cli::{bench, calibrate, can, codesign, logs, model, op, plan, run};
+use cli::{bench, calibrate, can, codesign, emulate, logs, model, op, plan, run};
 
 mod cli;
 
@@ -100,6 +100,12 @@ enum Command {
     Can {
         #[command(subcommand)]
         command: can::CanCommand,
+    },
+    /// Emulated hardware in its own process for the real drivers: `adam emulate imu --pty`
+    /// (a VN-100 on a pseudo-terminal).
+    Emulate {
+        #[command(subcommand)]
+        what: emulate::EmulateWhat,
     },
 }
 
@@ -205,5 +211,6 @@ fn dispatch(cli: Cli) -> Result<()> {
             }
         },
         Command::GenerateUrdf(args) => model::write_urdf(args),
+        Command::Emulate { what } => emulate::run(&what),
     }
 }

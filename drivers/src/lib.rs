@@ -1,4 +1,4 @@
-//! # drivers: A1 motors over CAN, for real and simulated
+//! # drivers: A1 motors over CAN and the VN-100 IMU, for real and simulated
 //!
 //! The hardware layer of adam-hzd: it turns joint commands into CAN frames for the
 //! Unitree A1 actuators of ADAM and replies back into joint states, behind one trait that
@@ -43,6 +43,16 @@
 //! them, so naming one in `configure` makes `activate` fail with `MissingReply` for it, exactly
 //! like an unplugged motor.
 //! Time is an argument (`budget`); only `SocketCanBus` reads the clock.
+//!
+//! ## The torso IMU: a VectorNav VN-100
+//! [`vn100::port::Vn100`] opens the serial port (`serialport`, built without libudev), turns
+//! the sensor's ASCII output off and asks for binary output 1 at 800 Hz (`$VNWRG,75,3,1,01,0129`:
+//! the common group's time since start-up, yaw/pitch/roll, angular rate, acceleration), then
+//! each `Imu::read_at` takes the bytes waiting (never blocking, nothing allocated), parses the
+//! frames (sync 0xFA, groups, fields, CRC-16-CCITT; resynchronising after garbage) and maps the
+//! newest to the runtime's sample by the mounting: VN x forward, y right, z down; mounted upright
+//! with x forward, the robot's pitch rate is −ω_y and its upward specific force −a_z.
+//! `adam emulate imu --pty` is the same sensor emulated on a pseudo-terminal.
 //!
 //! ## Example
 //! ```no_run

@@ -2,7 +2,8 @@
 //! safety limits, held joint positions, logging and telemetry, and the treadmill's belt speed
 //! range ([`TreadmillConfig`]: every belt speed a run asks for is checked against it), and the
 //! treadmill speed control's gains ([`SpeedConfig`]), the joint calibration
-//! ([`CalibrationConfig`]) and the bring-up's pre-flight limits and gains ramp ([`BringupConfig`]).
+//! ([`CalibrationConfig`]), the bring-up's pre-flight limits and gains ramp ([`BringupConfig`]),
+//! and the torso IMU's mounting and rates ([`ImuConfig`]).
 //!
 //! Checked data: `deny_unknown_fields` everywhere, a `schema_version`, and [`RuntimeConfig::validate`]
 //! rejects NaN/inf, out-of-range values, duplicate motors and bus layouts that
@@ -10,10 +11,12 @@
 
 mod bringup;
 pub mod calibration;
+mod imu;
 mod speed;
 
 pub use bringup::BringupConfig;
 pub use calibration::{CalibrationConfig, JointCalibration};
+pub use imu::{ImuConfig, VN100_BAUD_RATES_BPS};
 pub use speed::{PositionSource, SpeedConfig};
 
 use crate::slots::{SlotLayout, LEG_SLOTS, MAX_HELD, SLOTS};
@@ -369,6 +372,9 @@ pub struct RuntimeConfig {
     /// Pre-flight limits and the gains ramp (absent: [`BringupConfig::default`]).
     #[serde(default)]
     pub bringup: BringupConfig,
+    /// The torso IMU on the robot (absent: [`ImuConfig::default`]).
+    #[serde(default)]
+    pub imu: ImuConfig,
 }
 
 /// The URDF joint of each leg slot.
@@ -639,6 +645,7 @@ impl RuntimeConfig {
         self.speed.validate(origin)?;
         self.calibration.validate(origin)?;
         self.bringup.validate(origin)?;
+        self.imu.validate(origin)?;
         let [lo, hi] = self.treadmill.belt_speed_range_mps;
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
             return Err(bad(

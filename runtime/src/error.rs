@@ -67,9 +67,6 @@ pub enum RuntimeError {
     /// A CAN interface of the robot could not be opened.
     #[error(transparent)]
     CanOpen(#[from] drivers::socketcan_bus::OpenError),
-    /// The robot backend needs a torso IMU driver, and none exists yet.
-    #[error("no IMU driver for the robot's torso IMU yet: the CAN buses opened, but the loop needs pitch and pitch rate")]
-    NoImuDriver,
     /// The pre-flight checks refused to let the gains come on (`runtime::bringup`).
     #[error("pre-flight refused, no gain was turned on:{refusals}")]
     Preflight {
@@ -82,6 +79,15 @@ pub enum RuntimeError {
     Calibration {
         /// Every problem, one per line, each naming the joint, motor and value.
         problems: String,
+    },
+    /// The torso IMU could not be opened or configured.
+    #[error(transparent)]
+    Imu(#[from] drivers::vn100::Vn100Error),
+    /// Parts of the robot are missing: each named once (CAN interfaces, the IMU's serial port).
+    #[error("cannot run on the robot: {}", problems.join("; "))]
+    Robot {
+        /// What is missing, one entry each.
+        problems: Vec<String>,
     },
     /// A log was written with another channel layout than this build reads.
     #[error("MCAP log {path}: channel `{channel}` has log schema version {found}, this build reads version {expected}: open it with the adam version that wrote it")]

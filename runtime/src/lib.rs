@@ -8,7 +8,7 @@
 //! | module | what |
 //! |---|---|
 //! | [`slots`] | the motor slots everyone shares: [`slots::MotorSample`], [`slots::SlotLayout`], slot counts (a leaf) |
-//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints, treadmill speed control (`[speed]`), joint calibration (`[calibration]`), pre-flight limits and gains ramp (`[bringup]`) |
+//! | [`config`] | `configs/runtime/*.toml`: rate, buses, motors, gains, ramp, safety, held joints, treadmill speed control (`[speed]`), joint calibration (`[calibration]`), pre-flight limits and gains ramp (`[bringup]`), the torso IMU's mounting and rates (`[imu]`) |
 //! | [`bringup`] | before the first gain: `adam can scan` ([`bringup::scan`]), `adam calibrate` ([`bringup::calibrate()`]: jig poses → directions and zero offsets), the pre-flight ([`bringup::preflight()`]: each refusal names motor, bus and value); `--dry-run` is [`LoopOptions::dry_run`] |
 //! | [`control`] | sans-IO tick: estimator → phase τ → stance switching → y^d(τ) → PD commands; state machine ([`control::Controller`]); double support; treadmill speed control at impacts (a gait library by speed, a step-to-step regulator, the belt-position loop: [`Setup::library`], [`control::Controller::with_library`]) |
 //! | [`estimator`] | torso pitch Kalman filter with gyro-bias estimation |
@@ -18,7 +18,7 @@
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
 //! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures); the `/speed` channel ([`telemetry::speed_log`], [`telemetry::speed_read`]: `adam plot speed`) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
-//! | [`robot`] | the real robot over SocketCAN (opens the buses; no IMU driver yet) |
+//! | [`robot`] | the real robot: the motors over SocketCAN and the torso IMU, a VN-100 on a serial port ([`drivers::vn100`], `--imu vn100:/dev/ttyUSB0`), one backend for the same loop; whatever is missing is named once |
 //! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]) |
 //!
 //! ## Data flow of one tick

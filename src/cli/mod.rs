@@ -5,6 +5,7 @@ pub(crate) mod bench;
 pub(crate) mod calibrate;
 pub(crate) mod can;
 pub(crate) mod codesign;
+pub(crate) mod emulate;
 pub(crate) mod logs;
 pub(crate) mod model;
 pub(crate) mod op;

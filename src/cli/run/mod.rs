@@ -67,6 +67,10 @@ pub(crate) struct RunArgs {
     /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
     #[arg(long, value_delimiter = ',')]
     can_interfaces: Option<Vec<String>>,
+    /// The torso IMU, `<driver>:<serial port>`: `vn100:/dev/ttyUSB0` (a VectorNav VN-100,
+    /// mounted as the config's `[imu]` says) (can).
+    #[arg(long)]
+    imu: Option<String>,
     /// Inject faults (sim): a profile name (none, loss-0.1, loss-1, loss-10, corrupt-1,
     /// delay-1, soak, rough) or a TOML file; seeded by --seed.
     #[arg(long)]
@@ -133,7 +137,7 @@ enum Backend {
 }
 
 /// Parses `30s`, `1500ms` or `30` into seconds, more than 0 and at most a day.
-fn parse_duration_s(text: &str) -> Result<f64, String> {
+pub(crate) fn parse_duration_s(text: &str) -> Result<f64, String> {
     let t = text.trim();
     let (number, scale) = if let Some(ms) = t.strip_suffix("ms") {
         (ms, 1e-3)
@@ -176,10 +180,13 @@ fn parse_minutes(text: &str) -> Result<f64, String> {
 fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
     let given = |flag: &'static str, set: bool| set.then_some(flag);
     match backend {
-        Backend::Sim => [given("--can-interfaces", args.can_interfaces.is_some())]
-            .into_iter()
-            .flatten()
-            .collect(),
+        Backend::Sim => [
+            given("--can-interfaces", args.can_interfaces.is_some()),
+            given("--imu", args.imu.is_some()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
         Backend::Can => [
             given("--belt", args.belt.is_some()),
             given("--belt-acceleration", args.belt_acceleration.is_some()),
@@ -406,6 +413,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         real_time,
         keyboard,
         can_interfaces,
+        imu,
         faults,
         dry_run,
     } = args;
@@ -508,11 +516,40 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         Backend::Can => {
             let interfaces =
                 can_interfaces.unwrap_or_else(|| runtime::robot::default_interfaces(&setup));
-            let summary = runtime::robot::walk(&setup, &interfaces, duration)?;
-            println!("{}", RobotRunReport::of(&summary));
-            Ok(())
+            let imu = imu
+                .as_deref()
+                .map(|text| runtime::robot::ImuSource::parse(text, "--imu"))
+                .transpose()?;
+            // Everything missing is named here, before the operator channel or a motor moves.
+            let backend = runtime::robot::open(&setup, &interfaces, imu.as_ref())?;
+            robot_walk(&setup, backend, duration)
         }
     }
+}
+
+/// Walks on the robot under the operator (`adam op`, iceoryx2) and prints the report.
+fn robot_walk(
+    setup: &runtime::Setup,
+    backend: runtime::backend::WithImu<
+        drivers::socketcan_bus::SocketCanBus,
+        drivers::vn100::port::Vn100,
+    >,
+    duration_s: f64,
+) -> Result<()> {
+    use runtime::operator::{self, SharedHandle};
+    let (handle, receiver) = operator::channel(64);
+    let shared = SharedHandle::new(handle);
+    let service = operator::operator_service_name(&setup.config.telemetry.service_name);
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let forwarder = operator::spawn_iceoryx2_forwarder(&service, shared, stop.clone())?;
+    println!(
+        "on the robot: operator commands with `adam op <command>` (iceoryx2 service {service})"
+    );
+    let summary = runtime::robot::walk(setup, backend, duration_s, Some(receiver));
+    stop.store(true, std::sync::atomic::Ordering::Release);
+    let _ = forwarder.join();
+    println!("{}", RobotRunReport::of(&summary?));
+    Ok(())
 }
 
 /// `adam soak`: walks under random faults, resets after each trip, prints the soak table.
