@@ -21,7 +21,7 @@ use cli::bench::BenchWhat;
 use cli::codesign::CodesignStudy;
 use cli::logs::{LogsCommand, PlotWhat};
 use cli::plan::GaitCommand;
-use cli::{bench, codesign, logs, model, op, plan, run};
+use cli::{bench, codesign, emulate, logs, model, op, plan, run};
 
 mod cli;
 
@@ -82,10 +82,17 @@ enum Command {
         #[command(subcommand)]
         command: plan::GaitCommand,
     },
-    /// MCAP logs: `adam logs info <run.mcap>`, `adam logs recover <in.mcap> [--out <out.mcap>]`.
+    /// MCAP logs: `adam logs info <run.mcap>`, `adam logs recover <in.mcap> [--out <out.mcap>]`,
+    /// `adam logs candump <run.mcap> [--out <run.log>]`.
     Logs {
         #[command(subcommand)]
         command: logs::LogsCommand,
+    },
+    /// Emulate hardware for a runtime in another process: `adam emulate motors --listen
+    /// 127.0.0.1:PORT` serves the simulated robot's A1 motors over CAN-over-UDP.
+    Emulate {
+        #[command(subcommand)]
+        what: emulate::EmulateWhat,
     },
     /// Replay a log through this build's controller and compare every command with the logged
     /// one: bit-identical, or the first divergence (exit code 1). `--mint <dir>` instead records
@@ -121,6 +128,10 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Logs {
             command: LogsCommand::Recover { log, out, force },
         } => logs::recover(log, out, force),
+        Command::Logs {
+            command: LogsCommand::Candump { log, out, force },
+        } => logs::candump(&log, out, force),
+        Command::Emulate { what } => emulate::emulate(what),
         Command::Replay(args) => logs::replay(&args),
         Command::Model(args) => model::show_model(&args),
         Command::Bench {

@@ -3,6 +3,7 @@
 
 pub(crate) mod bench;
 pub(crate) mod codesign;
+pub(crate) mod emulate;
 pub(crate) mod logs;
 pub(crate) mod model;
 pub(crate) mod op;

@@ -3,8 +3,9 @@
 //! their injection into the simulated robot ([`inject`]), and what a run is told in time
 //! ([`treadmill`]: the belt's speed profile, pushes, scripted operator commands); the report of
 //! a run ([`report`]) and the treadmill scenarios of the bench and the acceptance tests
-//! ([`scenarios`]).
+//! ([`scenarios`]); the simulated robot served over UDP to another process ([`emulate`]).
 
+pub mod emulate;
 pub mod faults;
 pub mod inject;
 pub mod report;
