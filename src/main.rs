@@ -82,10 +82,18 @@ enum Command {
         #[command(subcommand)]
         command: plan::GaitCommand,
     },
-    /// MCAP logs: `adam logs info <run.mcap>`, `adam logs recover <in.mcap> [--out <out.mcap>]`.
+    /// MCAP logs: `adam logs info <run.mcap>`, `adam logs recover <in.mcap> [--out <out.mcap>]`,
+    /// `adam logs candump <run.mcap> [--out <run.log>]`.
     Logs {
         #[command(subcommand)]
         command: logs::LogsCommand,
+    },
+    /// Emulate hardware for a runtime in another process: `adam emulate motors --listen
+    /// 127.0.0.1:PORT` serves the simulated robot's A1 motors over CAN-over-UDP; `adam emulate
+    /// imu --pty` a VN-100 on a pseudo-terminal.
+    Emulate {
+        #[command(subcommand)]
+        what: emulate::EmulateWhat,
     },
     /// Replay a log through this build's controller and compare every command with the logged
     /// one: bit-identical, or the first divergence (exit code 1). `--mint <dir>` instead records
@@ -100,12 +108,6 @@ enum Command {
     Can {
         #[command(subcommand)]
         command: can::CanCommand,
-    },
-    /// Emulated hardware in its own process for the real drivers: `adam emulate imu --pty`
-    /// (a VN-100 on a pseudo-terminal).
-    Emulate {
-        #[command(subcommand)]
-        what: emulate::EmulateWhat,
     },
 }
 
@@ -135,6 +137,10 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Logs {
             command: LogsCommand::Recover { log, out, force },
         } => logs::recover(log, out, force),
+        Command::Logs {
+            command: LogsCommand::Candump { log, out, force },
+        } => logs::candump(&log, out, force),
+        Command::Emulate { what } => emulate::emulate(what),
         Command::Replay(args) => logs::replay(&args),
         Command::Calibrate(args) => calibrate::calibrate(args),
         Command::Can {
@@ -211,6 +217,5 @@ fn dispatch(cli: Cli) -> Result<()> {
             }
         },
         Command::GenerateUrdf(args) => model::write_urdf(args),
-        Command::Emulate { what } => emulate::run(&what),
     }
 }

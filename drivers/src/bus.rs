@@ -384,6 +384,12 @@ mod tests {
     }
 
     #[test]
+    fn the_frame_log_holds_a_failed_activation_of_every_motor() {
+        // enable + reply, then disable + reply, per motor
+        assert_eq!(crate::frame_log::FRAME_LOG_CAPACITY, 4 * MAX_MOTORS);
+    }
+
+    #[test]
     fn motor_table_rejects_bad_sets_with_the_culprit() {
         assert_eq!(
             MotorTable::new(&[], 2).unwrap_err(),

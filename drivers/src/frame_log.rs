@@ -11,7 +11,6 @@
 //! on the same bus (bits at the bitrate, stuffing included); `SocketCanBus` and `UdpBus` the
 //! monotonic time since the call began, read when the frame was written or read.
 
-use crate::bus::MAX_MOTORS;
 use core::time::Duration;
 
 /// Which way a frame went.
@@ -58,8 +57,9 @@ impl LoggedFrame {
 }
 
 /// Most frames one operation records: a command and a reply per motor, twice over (an
-/// `activate` that fails sends enable and then disable to every motor).
-pub const FRAME_LOG_CAPACITY: usize = 4 * MAX_MOTORS;
+/// `activate` that fails sends enable and then disable to every motor): 4 ×
+/// [`crate::bus::MAX_MOTORS`] (a test in `bus` checks it).
+pub const FRAME_LOG_CAPACITY: usize = 64;
 
 const EMPTY: LoggedFrame = LoggedFrame {
     bus: 0,

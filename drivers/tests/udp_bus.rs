@@ -178,3 +178,72 @@ fn opening_names_the_peer_and_bus_and_addresses_follow_the_port_rule() {
     let top: SocketAddr = "127.0.0.1:65535".parse().unwrap();
     assert!(drivers::udp::bus_addresses(&[top], 2).is_none());
 }
+
+/// The emulator's side: a stranger's datagram (here a *disable* to every motor) is dropped and
+/// counted, never acted on (the host's motors stay enabled), and so is a stranger's garbage.
+#[test]
+fn the_server_ignores_strangers_and_garbage() {
+    use drivers::sim::bus::{SimBus, SimConfig};
+    use drivers::sim::firmware::{A1Model, SimMotor};
+    use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
+    use drivers::udp::serve::MotorServer;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let spec = MotorSpec { bus: 0, id: id(1) };
+    let config = SimConfig {
+        control_rate_hz: 1000.0,
+        bitrate_bps: 1_000_000,
+        bus_count: 1,
+        motors: vec![SimMotor { spec, joint: 0 }],
+        model: A1Model::default(),
+        seed: 1,
+    };
+    let joint = RigidJoint {
+        inertia_kg_m2: 0.05,
+        damping_nm_s_per_rad: 0.05,
+        load_torque_nm: 0.0,
+    };
+    let sim = SimBus::new(config, InertiaDampingPlant::new(vec![joint]).unwrap()).unwrap();
+    let any: SocketAddr = "127.0.0.1:0".parse().unwrap();
+    let mut server = MotorServer::new(sim, vec![UdpSocket::bind(any).unwrap()]).unwrap();
+    let addr = server.local_addr(0).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    let thread = std::thread::spawn(move || {
+        while !flag.load(Ordering::Acquire) {
+            server.poll(Duration::from_micros(20)).unwrap();
+        }
+        server.stats()
+    });
+    let mut bus = UdpBus::open(&[addr]).unwrap();
+    bus.set_reply_timeout(Some(Duration::from_millis(300)));
+    bus.configure(&[spec]).unwrap();
+    bus.activate().unwrap();
+    let stranger = UdpSocket::bind(any).unwrap();
+    let disable = a1::encode_special(id(1), a1::Special::Disable);
+    stranger
+        .send_to(
+            &packet(&[CanFrame::standard(disable.id, &disable.data).unwrap()]),
+            addr,
+        )
+        .unwrap();
+    stranger.send_to(&[0xAB; 7], addr).unwrap();
+    let host_socket_addr = bus.local_addr(0).unwrap();
+    std::thread::sleep(Duration::from_millis(50));
+    let commands = [Command::damping(id(1), 1.0)];
+    let mut replies = [Reply::zeroed(id(9))];
+    for _ in 0..5 {
+        bus.exchange(&commands, &mut replies, Duration::from_millis(1))
+            .unwrap();
+        assert!(replies[0].enabled, "a stranger's disable was obeyed");
+    }
+    bus.deactivate().unwrap();
+    stop.store(true, Ordering::Release);
+    let stats = thread.join().unwrap();
+    assert_eq!(
+        stats.foreign_sender, 2,
+        "{stats:?} (host {host_socket_addr})"
+    );
+    assert_eq!(stats.malformed, 0, "{stats:?}");
+}

@@ -116,6 +116,9 @@ impl<B: MotorBus, I> MotorBus for WithImu<B, I> {
     fn deactivate(&mut self) -> drivers::bus::Result<()> {
         self.bus.deactivate()
     }
+    fn frames(&self) -> &[drivers::frame_log::LoggedFrame] {
+        self.bus.frames()
+    }
 }
 
 impl<B, I: Imu> Imu for WithImu<B, I> {

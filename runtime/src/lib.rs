@@ -16,10 +16,11 @@
 //! | [`operator`] | operator commands into the loop: SPSC ring + latching e-stop flag, never blocks; belt speed and speed offset (`belt 0.25`, keys `+`/`-`) |
 //! | [`backend`] | what the loop runs on: [`backend::Backend`] = [`drivers::bus::MotorBus`] + [`drivers::imu::Imu`]; [`backend::WithImu`] (pair a bus with an IMU) |
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
-//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures); the `/speed` channel ([`telemetry::speed_log`], [`telemetry::speed_read`]: `adam plot speed`) |
+//! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures); the `/speed` channel ([`telemetry::speed_log`], [`telemetry::speed_read`]: `adam plot speed`); every CAN frame on `/can` ([`telemetry::frames`]: `adam logs candump`) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot: the motors over SocketCAN and the torso IMU, a VN-100 on a serial port ([`drivers::vn100`], `--imu vn100:/dev/ttyUSB0`), one backend for the same loop; whatever is missing is named once |
-//! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]) |
+//! | [`udp`] | the loop over CAN-over-UDP links ([`drivers::udp::UdpBus`]): `adam run --backend udp` against `adam emulate motors` ([`sim::emulate`]) or cannelloni gateways |
+//! | [`sim`] | the loop on the simulated ADAM ([`sim::run`]: `SimBus<RobotSim>`, treadmill, walk metrics from ground truth, the soak), fault profiles ([`sim::faults`]: TOML or built-in, seeded schedule) and their injection ([`sim::inject`]); the simulated robot served over UDP to another process ([`sim::emulate`]); the robot hung on the boom for bring-up ([`sim::hung`]) |
 //!
 //! ## Data flow of one tick
 //! ```text
@@ -74,6 +75,7 @@ pub mod sim;
 pub mod slots;
 pub mod telemetry;
 pub mod tiles;
+pub mod udp;
 
 pub use backend::Backend;
 pub use drivers::imu::{Imu, ImuSample};

@@ -7,6 +7,7 @@
 //! read_at(t) (the IMU) ──────────────────────────┤
 //! operator: script entry due, else ring poll ────┴─▶ Controller::tick ─▶ commands
 //!                                                      └─▶ StateSample ─▶ iceoryx2 + log queue
+//! the exchange's CAN frames (MotorBus::frames) ─▶ log queue (`/can`)
 //! sleep until the absolute deadline t0 + (k+1)·T; late → overrun (streak feeds the safety monitor)
 //! ```
 //! Time comes from a [`Clock`]: [`MonotonicClock`] (real time, `clock_nanosleep` with an
@@ -23,6 +24,7 @@ use crate::operator::OperatorReceiver;
 use crate::rt_sys;
 use crate::safety::Trip;
 use crate::slots::{MotorSample, LEG_SLOTS, OUTPUTS, SLOTS};
+use crate::telemetry::frames::{BusOp, FrameBatch};
 use crate::telemetry::log::{LogContext, LogRecord, LogStats, TickRecord};
 use crate::telemetry::sample::{LoopStats, StateSample};
 use crate::{Result, RuntimeError, Setup};
@@ -315,6 +317,19 @@ fn to_a1(motor: MotorId, c: &JointCommand) -> Command {
     }
 }
 
+/// Queue a bus operation's frames for the log (`/can`): no allocation, never blocks.
+fn push_frames(
+    tx: &mut crate::telemetry::log::LogProducer,
+    op: BusOp,
+    t_s: f64,
+    tick: Option<u64>,
+    frames: &[drivers::frame_log::LoggedFrame],
+) {
+    for batch in FrameBatch::batches(op, t_s, tick, frames) {
+        tx.push(LogRecord::Frames(batch));
+    }
+}
+
 /// Run the loop on its own thread (`adam-rt`) and wait for it. Returns the summary and the
 /// backend (deactivated: every motor in damping).
 ///
@@ -444,7 +459,11 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
         None => (None, None),
     };
     backend.configure(&specs)?;
-    backend.activate()?;
+    let activated = backend.activate();
+    if let Some(tx) = log_tx.as_mut() {
+        push_frames(tx, BusOp::Activate, 0.0, None, backend.frames());
+    }
+    activated?;
 
     let budget = Duration::from_secs_f64(period_s);
     let damp = Command::damping(ids[0], config.gains.damping_kd_nm_s_per_rad);
@@ -490,6 +509,9 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
             r.q_rad = f64::NAN;
         }
         let result = backend.exchange(&commands, &mut replies, budget);
+        if let Some(tx) = log_tx.as_mut() {
+            push_frames(tx, BusOp::Exchange, t, Some(tick), backend.frames());
+        }
         let replies_valid = match result {
             Ok(_) | Err(BusError::MissingReply { .. }) => true,
             Err(_) => {
@@ -613,6 +635,9 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
         clock.sleep_until(deadline);
     }
     let deactivated = backend.deactivate();
+    if let Some(tx) = log_tx.as_mut() {
+        push_frames(tx, BusOp::Deactivate, input.t_s, None, backend.frames());
+    }
     let log = match logger {
         Some(l) => Some(l.finish()?),
         None => None,

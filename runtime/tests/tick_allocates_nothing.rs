@@ -172,3 +172,75 @@ fn controller_is_owned_plain_data() {
     fn owned<T: Send + Sync + Clone + 'static>() {}
     owned::<runtime::control::Controller>();
 }
+
+/// The tick's raw CAN frames reach the log without allocating: a `SimBus` exchange records
+/// its frames in fixed storage and `FrameBatch::batches` copies them into the log's wait-free ring
+/// (the writer thread, which formats them, does not count). Then the log holds them all.
+#[test]
+fn logging_the_ticks_can_frames_allocates_nothing() {
+    use drivers::a1::{Command, MotorId, Reply};
+    use drivers::bus::{MotorBus, MotorSpec};
+    use drivers::sim::bus::{SimBus, SimConfig};
+    use drivers::sim::firmware::{A1Model, SimMotor};
+    use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
+    use runtime::telemetry::frames::{BusOp, FrameBatch};
+    use runtime::telemetry::frames_read::read_frames;
+    use runtime::telemetry::log::{start, LogContext, LogRecord};
+
+    let setup = Setup::shipped().expect("shipped setup");
+    let layout = runtime::slots::SlotLayout::new(&setup.config, false);
+    let path = std::env::temp_dir().join(format!("adam-can-noalloc-{}.mcap", std::process::id()));
+    let (mut tx, logger) = start(&path, LogContext::new(&setup, &layout), 8192).expect("log");
+    let specs: Vec<MotorSpec> = (1..=4u8)
+        .map(|n| MotorSpec {
+            bus: usize::from(n > 2),
+            id: MotorId::new(n).expect("id"),
+        })
+        .collect();
+    let config = SimConfig {
+        control_rate_hz: 1000.0,
+        bitrate_bps: 1_000_000,
+        bus_count: 2,
+        motors: specs
+            .iter()
+            .enumerate()
+            .map(|(joint, &spec)| SimMotor { spec, joint })
+            .collect(),
+        model: A1Model::default(),
+        seed: 3,
+    };
+    let joint = RigidJoint {
+        inertia_kg_m2: 0.05,
+        damping_nm_s_per_rad: 0.05,
+        load_torque_nm: 0.0,
+    };
+    let plant = InertiaDampingPlant::new(vec![joint; 4]).expect("plant");
+    let mut bus = SimBus::new(config, plant).expect("bus");
+    bus.configure(&specs).expect("configure");
+    bus.activate().expect("activate");
+    let commands: Vec<Command> = specs.iter().map(|s| Command::damping(s.id, 1.0)).collect();
+    let mut replies: Vec<Reply> = specs.iter().map(|s| Reply::zeroed(s.id)).collect();
+    let ticks = 500u64;
+    let ((), allocations) = counted(|| {
+        for tick in 0..ticks {
+            bus.exchange(&commands, &mut replies, std::time::Duration::from_millis(1))
+                .expect("exchange");
+            let t_s = tick as f64 * 1e-3;
+            for batch in FrameBatch::batches(BusOp::Exchange, t_s, Some(tick), bus.frames()) {
+                tx.push(LogRecord::Frames(batch));
+            }
+        }
+    });
+    let stats = logger.finish().expect("finish");
+    assert_eq!(allocations, 0, "logging the frames allocated");
+    assert_eq!(stats.dropped, 0);
+    let rows = read_frames(&path).expect("frames");
+    assert_eq!(
+        rows.len() as u64,
+        8 * ticks,
+        "a command and a reply per motor and tick"
+    );
+    assert_eq!(rows[0].id, 0x101);
+    assert_eq!(rows[1].id, 0x181);
+    let _ = std::fs::remove_file(&path);
+}

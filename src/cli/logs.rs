@@ -39,6 +39,18 @@ pub(crate) enum LogsCommand {
         #[arg(long)]
         force: bool,
     },
+    /// Every CAN frame of a log (the `/can` channel) in can-utils' candump log format,
+    /// `(seconds) canN ID#DATA`, for `cantools decode drivers/a1_can.dbc` and `canplayer`.
+    Candump {
+        /// The log.
+        log: PathBuf,
+        /// Output file (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write over an existing output.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 /// The figures of `adam plot`.
@@ -242,4 +254,25 @@ fn figure_prefix(log: &Path, out: Option<PathBuf>, suffix: &str, force: bool) ->
         writable(&prefix.with_extension(extension), force)?;
     }
     Ok(prefix)
+}
+
+/// `adam logs candump`: the log's `/can` frames as a candump log, to `out` or standard output.
+pub(crate) fn candump(log: &Path, out: Option<PathBuf>, force: bool) -> Result<()> {
+    use std::io::Write as _;
+    let rows = runtime::telemetry::frames_read::read_frames(log)?;
+    let mut text = String::with_capacity(rows.len() * 40);
+    for row in &rows {
+        text.push_str(&runtime::telemetry::frames_read::candump_line(row));
+        text.push('\n');
+    }
+    match out {
+        Some(path) => {
+            writable(&path, force)?;
+            std::fs::write(&path, text)
+                .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))?;
+            eprintln!("wrote {} ({} frames)", path.display(), rows.len());
+        }
+        None => std::io::stdout().lock().write_all(text.as_bytes())?,
+    }
+    Ok(())
 }

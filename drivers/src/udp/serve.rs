@@ -98,15 +98,30 @@ impl<P: ServedPlant> MotorServer<P> {
         })
     }
 
-    /// Bind one socket per bus at `first` and the ports after it (bus `k` at port + `k`).
+    /// Bind one socket per bus at `first` and the ports after it (bus `k` at port + `k`). Port
+    /// 0: the OS picks bus 0's port, and the next ones must be free (tried up to 20 times).
     pub fn bind(first: SocketAddr, bus_count: usize) -> io::Result<Vec<UdpSocket>> {
-        (0..bus_count)
-            .map(|k| {
-                let port = u16::try_from(usize::from(first.port()) + k)
+        let consecutive = |first: SocketAddr| -> io::Result<Vec<UdpSocket>> {
+            let bus0 = UdpSocket::bind(first)?;
+            let base = bus0.local_addr()?.port();
+            let mut sockets = vec![bus0];
+            for k in 1..bus_count {
+                let port = u16::try_from(usize::from(base) + k)
                     .map_err(|_| io::Error::new(io::ErrorKind::InvalidInput, "port past 65535"))?;
-                UdpSocket::bind(SocketAddr::new(first.ip(), port))
-            })
-            .collect()
+                sockets.push(UdpSocket::bind(SocketAddr::new(first.ip(), port))?);
+            }
+            Ok(sockets)
+        };
+        let mut last = consecutive(first);
+        if first.port() == 0 {
+            for _ in 0..20 {
+                if last.is_ok() {
+                    break;
+                }
+                last = consecutive(first);
+            }
+        }
+        last
     }
 
     /// The simulation.

@@ -257,6 +257,9 @@ impl MotorBus for FaultySim {
     fn deactivate(&mut self) -> drivers::bus::Result<()> {
         self.bus.deactivate()
     }
+    fn frames(&self) -> &[drivers::frame_log::LoggedFrame] {
+        self.bus.frames()
+    }
 }
 
 impl Imu for FaultySim {

@@ -4,8 +4,9 @@
 //! ([`treadmill`]: the belt's speed profile, pushes, scripted operator commands); the report of
 //! a run ([`report`]) and the treadmill scenarios of the bench and the acceptance tests
 //! ([`scenarios`]); the robot hung on the boom for bring-up ([`hung`]: calibration, pre-flight,
-//! dry run).
+//! dry run); the simulated robot served over UDP to another process ([`emulate`]).
 
+pub mod emulate;
 pub mod faults;
 pub mod hung;
 pub mod inject;

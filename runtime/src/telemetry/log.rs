@@ -13,7 +13,7 @@
 //! `/input` (everything the controller read in a tick: time, motor replies, IMU sample,
 //! operator command, overrun streak) and `/command` (every command it wrote, and its state),
 //! both every tick whatever `log_every_n_ticks` says; `/speed` (one message per step while
-//! treadmill speed control runs: [`crate::telemetry::speed_log`]). Floats in `/input` and `/command` are
+//! treadmill speed control runs: [`crate::telemetry::speed_log`]); `/can` (every CAN frame: [`crate::telemetry::frames`]). Floats in `/input` and `/command` are
 //! written in shortest round-trip form and read back bit for bit (serde_json
 //! `float_roundtrip`); non-finite values are the strings `"NaN"`, `"inf"`, `"-inf"`.
 //! The gait file, the runtime config and the robot's URDF are attached, so a log replays on
@@ -70,6 +70,8 @@ pub enum LogRecord {
         /// True position on the belt (simulator), m.
         true_position_m: Option<f64>,
     },
+    /// Raw CAN frames of a bus operation ([`crate::telemetry::frames`]).
+    Frames(super::frames::FrameBatch),
 }
 
 /// One tick as the controller saw it: what it read and what it commanded.
@@ -157,7 +159,7 @@ pub const LOG_SCHEMA_VERSION: u32 = 1;
 pub const SCHEMA_VERSION_KEY: &str = "adam_log_schema";
 
 /// Names of the logged channels.
-pub const CHANNELS: [&str; 9] = [
+pub const CHANNELS: [&str; 10] = [
     "/joints",
     "/hzd",
     "/estimator",
@@ -167,6 +169,7 @@ pub const CHANNELS: [&str; 9] = [
     "/input",
     "/command",
     "/speed",
+    "/can",
 ];
 
 /// Attachment names: the gait file, the runtime config, the robot's URDF.
@@ -398,6 +401,7 @@ struct Channels {
     input: u16,
     command: u16,
     speed: u16,
+    can: u16,
 }
 
 fn number() -> Value {
@@ -479,6 +483,7 @@ impl Channels {
             input: add(CHANNELS[6], "adam.TickInput", &input)?,
             command: add(CHANNELS[7], "adam.TickCommand", &command)?,
             speed: add(CHANNELS[8], "adam.Speed", &super::speed_log::speed_schema())?,
+            can: add(CHANNELS[9], "adam.CanFrame", &super::frames::frame_schema())?,
         })
     }
 }
@@ -733,6 +738,8 @@ impl<W: std::io::Write + std::io::Seek> RecordWriter<W> {
                 self.put(self.ids.speed, *t_s, &v)?;
                 Ok(1)
             }
+            LogRecord::Frames(batch) => super::frames::batch_json(batch)
+                .try_fold(0, |n, (t, v)| self.put(self.ids.can, t, &v).map(|()| n + 1)),
         }
     }
 }

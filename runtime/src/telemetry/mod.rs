@@ -2,8 +2,11 @@
 //! the MCAP log ([`log`]: writer thread; [`log_read`]: reading it back; [`salvage`]: the one
 //! way every reader reads, past damage; [`loss`]: what damage took; [`recover`]: a damaged log
 //! rewritten whole), the deterministic [`replay`] of a log through the controller, and the
-//! treadmill speed control's `/speed` channel ([`speed_log`], read by [`speed_read`]).
+//! treadmill speed control's `/speed` channel ([`speed_log`], read by [`speed_read`]), and the
+//! raw CAN frames of the `/can` channel ([`frames`], read by [`frames_read`]: `adam logs candump`).
 
+pub mod frames;
+pub mod frames_read;
 pub mod log;
 pub mod log_read;
 pub mod loss;

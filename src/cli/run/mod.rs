@@ -71,6 +71,10 @@ pub(crate) struct RunArgs {
     /// mounted as the config's `[imu]` says) (can).
     #[arg(long)]
     imu: Option<String>,
+    /// The motors' CAN-over-UDP address (udp): `HOST:PORT` (bus k at PORT + k) or one address
+    /// per bus, comma separated; e.g. `adam emulate motors --listen 127.0.0.1:PORT`'s.
+    #[arg(long, value_delimiter = ',')]
+    motors: Option<Vec<std::net::SocketAddr>>,
     /// Inject faults (sim): a profile name (none, loss-0.1, loss-1, loss-10, corrupt-1,
     /// delay-1, soak, rough) or a TOML file; seeded by --seed.
     #[arg(long)]
@@ -134,6 +138,10 @@ enum Backend {
     Sim,
     /// The robot over SocketCAN.
     Can,
+    /// The motors over CAN-over-UDP links (cannelloni's format): `adam emulate motors` in
+    /// another process, or cannelloni gateways. Without --real-time the loop runs as fast as the
+    /// link answers, in lockstep with the emulator.
+    Udp,
 }
 
 /// Parses `30s`, `1500ms` or `30` into seconds, more than 0 and at most a day.
@@ -183,6 +191,20 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
         Backend::Sim => [
             given("--can-interfaces", args.can_interfaces.is_some()),
             given("--imu", args.imu.is_some()),
+            given("--motors", args.motors.is_some()),
+        ]
+        .into_iter()
+        .flatten()
+        .collect(),
+        Backend::Udp => [
+            given("--belt", args.belt.is_some()),
+            given("--belt-acceleration", args.belt_acceleration.is_some()),
+            given("--push", !args.push.is_empty()),
+            given("--seed", args.seed.is_some()),
+            given("--keyboard", args.keyboard),
+            given("--can-interfaces", args.can_interfaces.is_some()),
+            given("--faults", args.faults.is_some()),
+            given("--imu", args.imu.is_some()),
         ]
         .into_iter()
         .flatten()
@@ -199,6 +221,7 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--real-time", args.real_time),
             given("--keyboard", args.keyboard),
             given("--faults", args.faults.is_some()),
+            given("--motors", args.motors.is_some()),
         ]
         .into_iter()
         .flatten()
@@ -386,12 +409,13 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<()> {
 pub(crate) fn run(args: RunArgs) -> Result<()> {
     let unused = unused_flags(args.backend, &args);
     if !unused.is_empty() {
-        let (backend, other) = match args.backend {
-            Backend::Sim => ("sim", "can"),
-            Backend::Can => ("can", "sim"),
+        let backend = match args.backend {
+            Backend::Sim => "sim",
+            Backend::Can => "can",
+            Backend::Udp => "udp",
         };
         bail!(
-            "{} {} not used by --backend {backend} (only by --backend {other}): remove {}",
+            "{} {} not used by --backend {backend}: remove {}",
             unused.join(", "),
             if unused.len() == 1 { "is" } else { "are" },
             if unused.len() == 1 { "it" } else { "them" },
@@ -414,6 +438,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         keyboard,
         can_interfaces,
         imu,
+        motors,
         faults,
         dry_run,
     } = args;
@@ -512,6 +537,37 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             } else {
                 sim_walk(&setup, &options)
             }
+        }
+        Backend::Udp => {
+            let Some(motors) = motors else {
+                bail!("--backend udp needs --motors HOST:PORT (e.g. the address of `adam emulate motors --listen`)");
+            };
+            if let Some(path) = &log {
+                writable(path, force)?;
+            }
+            let mut options = runtime::udp::UdpRunOptions::new(duration);
+            options.start_walking = !matches!(start, Some(Start::Stand));
+            options.script = script
+                .as_deref()
+                .map(|s| runtime::sim::treadmill::parse_script(s, "--script"))
+                .transpose()?
+                .unwrap_or_default();
+            options.real_time = real_time;
+            options.log_path = log.clone();
+            let (summary, link) = runtime::udp::walk(&setup, &motors, &options)?;
+            println!("{}", RobotRunReport::of(&summary));
+            println!(
+                "link: {} packets out, {} in; {} IMU samples; dropped: {} from unexpected senders, {} malformed, {} stale; replies not used: {} wrong motor, {} undecodable",
+                link.packets_sent, link.packets_received, link.imu_samples, link.foreign_sender,
+                link.malformed, link.stale, link.unexpected_replies, link.bad_replies
+            );
+            if let Some(path) = &log {
+                println!("log written: {}", path.display());
+            }
+            if let Some(trip) = summary.trip {
+                bail!("safety trip: {}", trip.name());
+            }
+            Ok(())
         }
         Backend::Can => {
             let interfaces =
