@@ -239,3 +239,26 @@ fn a_dry_run_sends_zero_torque_and_logs_what_it_would_have_sent() {
     let _ = std::fs::remove_file(&log);
     assert!(format!("{info:?}").contains("dry_run"), "{info:?}");
 }
+
+#[test]
+fn a_run_on_the_robot_refuses_before_its_loop_under_the_wall_clock() {
+    // The hardware path (any backend, the wall clock): a silent motor stops it before the
+    // loop starts, so no gain ever came on.
+    let setup = Setup::shipped().expect("setup");
+    let mut robot = hung(&setup, upright());
+    assert!(robot.bus.set_silent(MotorId::new(1).expect("id"), true));
+    let run = bringup::RobotRun {
+        duration_s: 1.0,
+        dry_run: false,
+        with_held: false,
+        log_path: None,
+    };
+    let e = bringup::run_on_robot(&setup, robot, &run, None)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        e.contains("pre-flight refused") && e.contains("left_hip_pitch (bus 0, id 1): no reply"),
+        "{e}"
+    );
+}

@@ -392,6 +392,32 @@ mod tests {
     }
 
     #[test]
+    fn a_flipped_mount_reads_the_motor_angle_and_drives_the_joint_the_other_way() {
+        let model = A1Model::default();
+        let motor = SimMotor {
+            spec: MotorSpec { bus: 0, id: id(3) },
+            joint: 0,
+        };
+        let mut fw = Firmware::new(motor, &model, 0.8);
+        fw.mount = EncoderMount {
+            direction: -1.0,
+            joint_rad_at_zero: 0.3,
+        };
+        let period = TickPeriod::new(&model);
+        let mut rng = <ChaCha8Rng as rand::SeedableRng>::seed_from_u64(1);
+        fw.tick(0.8, 0.0, &period, &model, &mut rng);
+        // m = −(q − 0.3) = −0.5 rad.
+        let q = fw.reply().q_rad;
+        assert!((q + 0.5).abs() < 1e-3, "{q}");
+        // A motor-side push toward +m drives the joint toward −q.
+        fw.enabled = true;
+        fw.active = Command::pd(id(3), 0.0, 0.0, 0.0, 0.0, 5.0);
+        let joint_nm = fw.tick(0.8, 0.0, &period, &model, &mut rng);
+        assert_eq!(joint_nm, -5.0);
+        assert_eq!(fw.reply().tau_nm, 5.0);
+    }
+
+    #[test]
     fn set_zero_and_malformed_frames_in_the_firmware() {
         let model = A1Model::default();
         let motor = SimMotor {

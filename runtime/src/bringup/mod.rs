@@ -44,3 +44,41 @@ pub fn jig_angles(setup: &Setup, pose: JigPose) -> [f64; LEG_SLOTS] {
     }
     q
 }
+
+/// How a run on the robot goes after the bring-up ([`run_on_robot`]).
+#[derive(Clone, Debug)]
+pub struct RobotRun {
+    /// Run time, s.
+    pub duration_s: f64,
+    /// Send every motor zero torque, logging what the controller would have sent.
+    pub dry_run: bool,
+    /// Drive the held motors too (the robot: yes).
+    pub with_held: bool,
+    /// Write an MCAP log here.
+    pub log_path: Option<std::path::PathBuf>,
+}
+
+/// A run on hardware (any [`crate::Backend`]: SocketCAN or UDP motors with an IMU driver): the
+/// pre-flight under the wall clock, which refuses before any gain comes on; then the loop in
+/// real time (mlockall, SCHED_FIFO as the config says) with operator commands from `operator`.
+pub fn run_on_robot<B>(
+    setup: &Setup,
+    mut backend: B,
+    run: &RobotRun,
+    operator: Option<crate::operator::OperatorReceiver>,
+) -> crate::Result<(PreflightReport, crate::RunSummary, B)>
+where
+    B: crate::Backend + Send + 'static,
+{
+    use crate::rt_loop::{LoopOptions, MonotonicClock};
+    let report = preflight(setup, &mut backend, &mut MonotonicClock, run.with_held)?;
+    report.refuse()?;
+    let mut options = LoopOptions::simulation(run.duration_s);
+    options.with_held = run.with_held;
+    options.dry_run = run.dry_run;
+    options.realtime = true;
+    options.publish = true;
+    options.log_path = run.log_path.clone();
+    let (summary, backend) = crate::run(setup, backend, MonotonicClock, options, operator)?;
+    Ok((report, summary, backend))
+}
