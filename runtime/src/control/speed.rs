@@ -69,7 +69,7 @@
 //!    planned with steps of at most 0.22 m (`configs/planner/adam_library.toml`): a continuous
 //!    family, and no trip at 0.35 m/s (docs/gait-library.md, "Step bounds").
 //! 4. **The belt step** shows the lag at its worst (seed 1, `docs/figures/speed-belt-step.png`):
-//!    after the step up at 20 s, σ rose from 0.15 to 0.25 m/s over seven steps while the walk
+//!    after the step up at 20 s, σ rose from 0.15 to 0.25 m/s over some 5 s while the walk
 //!    *slowed* from 0.26 to 0.13 m/s (a faster gait first walks slower steps), the position
 //!    loop then drove σ to the top of the library (0.40) and the walk overshot to 0.44 m/s;
 //!    back at 0.20 m/s σ sat at the bottom of the library (0.15) from 52 s on while the walk
