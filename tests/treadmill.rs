@@ -120,6 +120,48 @@ fn the_belt_profile_ramps_at_the_set_acceleration_in_the_truth() {
     }
 }
 
+/// The shipped library is one continuous family over 0.15–0.40 m/s: its step length never
+/// shrinks with speed and neighbouring gaits differ by at most 0.03 m in step length and 0.1 s
+/// in duration (speed control interpolates neighbours; planned with Table I's steps up to
+/// 0.35 m it jumped from 0.20 m / 0.67 s to 0.26 m / 0.79 s between 0.300 and 0.325 m/s, and
+/// the gaits in between stalled on a 0.35 m/s belt).
+#[test]
+fn the_shipped_library_is_one_continuous_family() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/gaits/adam_library.json"
+    );
+    let library = model::library::GaitLibrary::load(path).expect("the shipped library loads");
+    let speeds: Vec<f64> = library.entries.iter().map(|e| e.speed_mps).collect();
+    assert!(
+        speeds.first().is_some_and(|&v| v <= 0.15 + 1e-9)
+            && speeds.last().is_some_and(|&v| v >= 0.35 - 1e-9),
+        "{speeds:?}"
+    );
+    for w in library.entries.windows(2) {
+        let (a, b) = (&w[0].gait, &w[1].gait);
+        let what = format!("{} → {} m/s", w[0].speed_mps, w[1].speed_mps);
+        assert!(
+            b.step_length_m >= a.step_length_m - 1e-6,
+            "{what}: step {} → {} m",
+            a.step_length_m,
+            b.step_length_m
+        );
+        assert!(
+            b.step_length_m - a.step_length_m <= 0.03,
+            "{what}: step {} → {} m",
+            a.step_length_m,
+            b.step_length_m
+        );
+        assert!(
+            (b.step_duration_s - a.step_duration_s).abs() <= 0.1,
+            "{what}: duration {} → {} s",
+            a.step_duration_s,
+            b.step_duration_s
+        );
+    }
+}
+
 /// Belt 0.25, 0.30 and 0.35 m/s for 60 s with speed control, seeds 1–5: no fall, no trip, the
 /// walking speed after 10 s within 2 % of the belt's; at 0.30 and 0.35 m/s within ±0.15 m of
 /// the centre after 10 s (measured 2026-12-05: 0.132 and 0.100 m; 0.25 m/s: 0.312 m). Before

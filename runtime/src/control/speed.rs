@@ -68,9 +68,13 @@
 //!    (0.27, 0.44, 0.30, 0.57 m/s in a row) and stalled in all five seeds. The library is now
 //!    planned with steps of at most 0.22 m (`configs/planner/adam_library.toml`): a continuous
 //!    family, and no trip at 0.35 m/s (docs/gait-library.md, "Step bounds").
-//! 4. **The belt step** combines 1 and 3: up to 0.30 m/s the walk overshoots into the fast
-//!    orbits; back to 0.20 m/s it stays fast while the position loop drives σ to the bottom
-//!    of the library, and the robot walks off the front of the belt or stalls there.
+//! 4. **The belt step** shows the lag at its worst (seed 1, `docs/figures/speed-belt-step.png`):
+//!    after the step up at 20 s, σ rose from 0.15 to 0.25 m/s over some 5 s while the walk
+//!    *slowed* from 0.26 to 0.13 m/s (a faster gait first walks slower steps), the position
+//!    loop then drove σ to the top of the library (0.40) and the walk overshot to 0.44 m/s;
+//!    back at 0.20 m/s σ sat at the bottom of the library (0.15) from 52 s on while the walk
+//!    sped up to 0.23–0.25 m/s on a fast orbit (item 1), 0.6 m forward of the centre at 60 s.
+//!    In other seeds the same runs off the front of the belt or stalls (bench table).
 //!
 //! What would fix it lies outside this module: a lever on the energy of each step (the step
 //! length at touchdown, as the braking step of a Stop does: a longer step loses more at the
