@@ -13,7 +13,7 @@ fn measure(phase: PhaseSource) -> (f64, f64, f64, f64) {
     let mut setup = Setup::shipped().expect("shipped setup");
     setup.config.walk.phase = phase;
     // No robot: with the state-based phase the step never ends; keep the stall check quiet.
-    setup.config.safety.max_step_duration_factor = 1e9;
+    setup.config.safety.stall_timeout_s = 1e9;
     let mut c = setup.controller(false).expect("controller");
     let mut input = TickInput::default();
     for m in input.motors.iter_mut().take(4) {

@@ -220,8 +220,8 @@ fn default_max_implausible_imu_samples() -> u32 {
     5
 }
 
-fn default_max_step_duration_factor() -> f64 {
-    3.0
+fn default_stall_timeout_s() -> f64 {
+    1.5
 }
 
 fn default_stop_step_length_m() -> f64 {
@@ -276,10 +276,16 @@ pub struct SafetyConfig {
     /// sample or two).
     #[serde(default = "default_max_implausible_imu_samples")]
     pub max_implausible_imu_samples: u32,
-    /// A step (Walk, Stop) lasting longer than this many times the gait's step duration is a
-    /// stalled walk (the robot stopped progressing, e.g. after a push) and trips.
-    #[serde(default = "default_max_step_duration_factor")]
-    pub max_step_duration_factor: f64,
+    /// A walk (Walk, Stop) whose phase makes no progress for this long has stalled (held, or
+    /// stuck on both feet) and trips the step timeout ([`crate::safety::ProgressWatch`]), s. A
+    /// slow step that progresses never trips.
+    #[serde(default = "default_stall_timeout_s")]
+    pub stall_timeout_s: f64,
+    /// Replaced by `stall_timeout_s` (the step timeout trips on a stalled phase, not on the
+    /// step's duration). Read and ignored, so that configs and the logs of runs from before
+    /// still load, replay and plot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_step_duration_factor: Option<f64>,
 }
 
 /// MCAP logging and zero-copy telemetry.
@@ -677,13 +683,7 @@ impl RuntimeConfig {
         positive("safety.max_temperature_c", s.max_temperature_c)?;
         positive("safety.max_imu_age_s", s.max_imu_age_s)?;
         positive("safety.max_gyro_rad_s", s.max_gyro_rad_s)?;
-        if !(s.max_step_duration_factor.is_finite() && s.max_step_duration_factor > 1.0) {
-            return Err(bad(
-                "safety.max_step_duration_factor",
-                s.max_step_duration_factor.to_string(),
-                "must be finite and > 1 (a multiple of the gait's step duration)",
-            ));
-        }
+        positive("safety.stall_timeout_s", s.stall_timeout_s)?;
         if s.torque_saturation_ticks == 0 {
             return Err(bad(
                 "safety.torque_saturation_ticks",

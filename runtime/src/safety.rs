@@ -3,6 +3,14 @@
 //! Each check that fails yields a [`Trip`]: a small `Copy` value with the reason and the
 //! offending values (no string formatting on the hot path). The controller goes to Damping on
 //! the first trip and latches it until an operator `Reset`.
+//!
+//! # The step timeout: a stall, not a slow step
+//! [`ProgressWatch`] trips [`Trip::StepTimeout`] when the walk's phase τ has made no progress
+//! (risen [`STALL_MIN_PROGRESS`] above the highest τ of the step so far) for
+//! `safety.stall_timeout_s`. A robot held in place, or standing stuck on both feet, stalls;
+//! a step slowed by a push, or whose phase runs back for a moment and then passes its highest
+//! point again, does not, however long the step lasts. Before, a step lasting three times the
+//! gait's duration tripped, progressing or not.
 
 use crate::config::SafetyConfig;
 use crate::slots::{MotorSample, SlotLayout, LEG_SLOTS, SLOTS};
@@ -87,9 +95,9 @@ pub enum Trip {
         /// Limit.
         limit: u32,
     },
-    /// A step lasted far longer than the gait's (the walk stalled).
+    /// The walk stalled: its phase made no progress for too long ([`ProgressWatch`]).
     StepTimeout {
-        /// Time since the step began, s.
+        /// Time since the phase last progressed, s.
         elapsed_s: f64,
         /// Limit, s.
         limit_s: f64,
@@ -163,7 +171,7 @@ impl std::fmt::Display for Trip {
             ),
             Trip::StepTimeout { elapsed_s, limit_s } => write!(
                 f,
-                "step timeout: {elapsed_s:.3} s into the step (limit {limit_s:.3} s)"
+                "step timeout: no phase progress for {elapsed_s:.3} s (limit {limit_s:.3} s)"
             ),
         }
     }
@@ -410,9 +418,121 @@ impl SafetyMonitor {
     }
 }
 
+/// Phase progress that counts for the [`ProgressWatch`]: τ this far above the highest τ of the
+/// step so far (a normal step covers it in about 10 ms).
+pub const STALL_MIN_PROGRESS: f64 = 0.01;
+
+/// The step timeout ([`Trip::StepTimeout`]): watches a walk's phase τ and trips when it has not
+/// risen [`STALL_MIN_PROGRESS`] above its highest value of the step for longer than the limit.
+/// The controller restarts it at each impact (and at the end of a launch) and disarms it
+/// outside Walk and Stop. A phase that is not finite never progresses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProgressWatch {
+    limit_s: f64,
+    armed: bool,
+    /// Highest phase of the step that counted as progress.
+    best_phase: f64,
+    /// When the phase last progressed, s.
+    since_t_s: f64,
+}
+
+impl ProgressWatch {
+    /// A disarmed watch that trips after `limit_s` without progress.
+    pub fn new(limit_s: f64) -> Self {
+        Self {
+            limit_s,
+            armed: false,
+            best_phase: f64::NEG_INFINITY,
+            since_t_s: 0.0,
+        }
+    }
+
+    /// Arms the watch at the start of a step (or of the walk): `phase` at `t_s` is its start.
+    pub fn restart(&mut self, t_s: f64, phase: f64) {
+        self.armed = true;
+        self.best_phase = if phase.is_finite() {
+            phase
+        } else {
+            f64::NEG_INFINITY
+        };
+        self.since_t_s = t_s;
+    }
+
+    /// Stops watching (the robot is not walking, or a launch moves it on a timed plan).
+    pub fn disarm(&mut self) {
+        self.armed = false;
+    }
+
+    /// Whether the watch is armed.
+    pub fn armed(&self) -> bool {
+        self.armed
+    }
+
+    /// Feeds the phase at `t_s`; the trip if it has not progressed for longer than the limit.
+    pub fn check(&mut self, t_s: f64, phase: f64) -> Option<Trip> {
+        if !self.armed {
+            return None;
+        }
+        if phase.is_finite() && phase >= self.best_phase + STALL_MIN_PROGRESS {
+            self.best_phase = phase;
+            self.since_t_s = t_s;
+        }
+        let stalled_s = t_s - self.since_t_s;
+        (stalled_s > self.limit_s).then_some(Trip::StepTimeout {
+            elapsed_s: stalled_s,
+            limit_s: self.limit_s,
+        })
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
+    /// Feeds `phase(t)` at 1 kHz for `seconds`; when it tripped, if it did.
+    fn watch(seconds: f64, phase: impl Fn(f64) -> f64) -> Option<(f64, Trip)> {
+        let mut w = ProgressWatch::new(1.5);
+        w.restart(0.0, phase(0.0));
+        for k in 1..=(seconds * 1e3) as u32 {
+            let t = f64::from(k) * 1e-3;
+            if let Some(trip) = w.check(t, phase(t)) {
+                return Some((t, trip));
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn a_held_walk_trips_the_step_timeout_and_a_slow_one_does_not() {
+        // Held: the phase stops at 0.4 from 0.3 s on: trips 1.5 s later.
+        let (t, trip) = watch(10.0, |t| 1.25 * t.min(0.3) + 0.01 * (50.0 * t).sin()).unwrap();
+        assert!((t - 1.8).abs() < 0.05, "{t} {trip}");
+        assert_eq!(trip.name(), "step_timeout");
+        // A step slowed twentyfold (τ̇ = 0.06/s: 17 s long) never trips.
+        assert_eq!(watch(16.0, |t| 0.06 * t), None);
+        // Running back for 0.8 s after a push and past its highest point again 1.2 s after it
+        // stopped progressing: rides through. Running back for good: trips.
+        let back_and_on = |t: f64| {
+            if t < 0.5 {
+                t
+            } else if t < 1.3 {
+                0.5 - 0.5 * (t - 0.5)
+            } else {
+                0.1 + (t - 1.3)
+            }
+        };
+        assert_eq!(watch(3.0, back_and_on), None);
+        let (t, _) = watch(5.0, |t| if t < 0.5 { t } else { 1.0 - t }).unwrap();
+        assert!((t - 2.0).abs() < 0.02, "{t}");
+        // A phase that is not finite never progresses.
+        let (t, _) = watch(5.0, |t| if t < 1.0 { t } else { f64::NAN }).unwrap();
+        assert!((t - 2.5).abs() < 0.02, "{t}");
+        // Disarmed: never.
+        let mut w = ProgressWatch::new(0.1);
+        w.restart(0.0, 0.0);
+        w.disarm();
+        assert_eq!(w.check(10.0, 0.0), None);
+    }
+
     #[test]
     fn trips_name_the_reason_the_values_and_their_units() {
         let text = |t: Trip| t.to_string();

@@ -79,7 +79,7 @@ fn walk_without_allocating_with(phase: PhaseSource, with_library: bool) {
     setup.config.walk.phase = phase;
     // No robot here: with the state-based phase the step never ends; the stall check
     // (step timeout) is not what this test is about.
-    setup.config.safety.max_step_duration_factor = 1e9;
+    setup.config.safety.stall_timeout_s = 1e9;
     let mut c = setup.controller(false).expect("controller");
     let mut input = TickInput::default();
     for m in input.motors.iter_mut().take(4) {

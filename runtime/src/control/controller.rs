@@ -14,6 +14,7 @@
 //! Walk from Stand: 1 s launch in double support, then the first step blends into y^d(τ)
 //! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
 //!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles
+//! Walk/Stop: no progress of τ for safety.stall_timeout_s ──▶ Damping (Trip::StepTimeout)
 //!   ▼
 //! TickOutput { commands[14] (PD or damping, motor side), status }
 //! ```
@@ -58,7 +59,7 @@ use super::transitions::{
 };
 use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
 use crate::estimator::{EstimatorParams, PitchEstimator};
-use crate::safety::{SafetyInput, SafetyMonitor, Trip};
+use crate::safety::{ProgressWatch, SafetyInput, SafetyMonitor, Trip};
 use crate::slots::{MotorSample, SlotLayout, LEG_SLOTS, OUTPUTS, SLOTS};
 use crate::{Result, RuntimeError};
 use model::gait::GaitFile;
@@ -114,8 +115,8 @@ pub struct Controller {
     stance: Side,
     steps: u32,
     step_start_t_s: f64,
-    /// A step lasting longer than this trips [`Trip::StepTimeout`], s.
-    step_timeout_s: f64,
+    /// The step timeout: trips [`Trip::StepTimeout`] when the walk's phase stops progressing.
+    progress: ProgressWatch,
     touchdown_ticks: u32,
     /// (time, swing-foot height) at the previous walking tick.
     last_foot: Option<(f64, f64)>,
@@ -229,9 +230,6 @@ impl Controller {
             &geometry,
             stop_step_m,
         )?;
-        let longest_step_s = library.as_ref().map_or(gait.step_duration_s, |l| {
-            l.longest_step_s().max(gait.step_duration_s)
-        });
         let layout = SlotLayout::new(config, with_held);
         let zero_ramp = Ramp {
             start_t_s: 0.0,
@@ -279,7 +277,7 @@ impl Controller {
             stance: gait.stance_leg,
             steps: 0,
             step_start_t_s: 0.0,
-            step_timeout_s: config.safety.max_step_duration_factor * longest_step_s,
+            progress: ProgressWatch::new(config.safety.stall_timeout_s),
             touchdown_ticks: 0,
             last_foot: None,
             phase_hat: None,
@@ -495,20 +493,6 @@ impl Controller {
             }
             self.enter(ControlState::Damping, status);
         }
-        // A stalled walk: the step has lasted several times the gait's.
-        if matches!(self.state, ControlState::Walk | ControlState::Stop) {
-            let elapsed_s = t - self.step_start_t_s;
-            if elapsed_s > self.step_timeout_s {
-                if self.trip.is_none() {
-                    self.trip = Some(Trip::StepTimeout {
-                        elapsed_s,
-                        limit_s: self.step_timeout_s,
-                    });
-                    status.new_trip = true;
-                }
-                self.enter(ControlState::Damping, status);
-            }
-        }
         if self.state == ControlState::Ramp && t - self.ramp.start_t_s >= self.ramp.duration_s {
             self.enter(ControlState::Stand, status);
         }
@@ -570,8 +554,8 @@ impl Controller {
                         *o = leg_q[self.gait.out_slot[stance][i]] - eval.y[i];
                     }
                     self.start_blend = Some(StartBlend::new(eval.phase.clamp(0.0, 1.0), offset));
-                    // The first step starts now (the step timeout and a time-based phase
-                    // count from here).
+                    // The first step starts now (a time-based phase counts from here; the step
+                    // timeout watches its phase from the next tick).
                     self.step_start_t_s = t;
                     self.launch = None;
                     self.last_foot = None;
@@ -651,6 +635,7 @@ impl Controller {
                     }
                     self.phase_hat = Some((eval.phase, rate, t));
                     self.observe_phase(t, &mut eval);
+                    self.progress.restart(t, eval.phase);
                 }
                 (y_des, dy_des) = (eval.y, eval.dy);
                 (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
@@ -670,6 +655,21 @@ impl Controller {
                     self.walk_commands(&eval, &mut out.commands);
                 }
             }
+        }
+        // The step timeout: a walk whose phase stopped progressing (held, stuck on both feet).
+        let walking = matches!(self.state, ControlState::Walk | ControlState::Stop);
+        if !walking || self.launch.is_some() {
+            self.progress.disarm();
+        } else if !self.progress.armed() {
+            self.progress.restart(t, phase);
+        } else if let Some(trip) = self.progress.check(t, phase) {
+            if self.trip.is_none() {
+                self.trip = Some(trip);
+                status.new_trip = true;
+            }
+            self.enter(ControlState::Damping, status);
+            out.commands = [JointCommand::damping(self.damping_kd); SLOTS];
+            (y_des, dy_des) = ([0.0; OUTPUTS], [0.0; OUTPUTS]);
         }
         let stance = side_index(self.stance);
         let mut y_act = [0.0; OUTPUTS];

@@ -224,14 +224,6 @@ impl SpeedLibrary {
         }))
     }
 
-    /// The longest step duration of the library, s.
-    pub(super) fn longest_step_s(&self) -> f64 {
-        self.tables
-            .iter()
-            .map(|t| t.step_duration_s)
-            .fold(0.0, f64::max)
-    }
-
     /// Slowest and fastest speed, m/s.
     pub(super) fn range_mps(&self) -> (f64, f64) {
         let n = self.speeds_mps.len();

@@ -461,3 +461,61 @@ fn min_jerk_is_smooth_and_peaks_at_1_875() {
     let fd = (min_jerk(0.3 + h).0 - min_jerk(0.3 - h).0) / (2.0 * h);
     assert!((fd - min_jerk(0.3).1).abs() < 1e-8);
 }
+
+/// A walk on the harness after the launch from Stand: ideal motors, the torso pitching at
+/// `pitch_rate_rad_s` (gyro) from then on. Returns the trip and how long after the launch, or
+/// the phase and the steps walked after `seconds`.
+fn walk_pitching(
+    pitch_rate_rad_s: f64,
+    seconds: f64,
+) -> std::result::Result<(Trip, f64), (f64, u32)> {
+    let mut h = Harness::new(PhaseSource::StateBased);
+    h.go_stand();
+    h.step(Some(OperatorCommand::Walk));
+    h.run(crate::control::transitions::LAUNCH_DURATION_S + 0.01);
+    let t0 = h.input.t_s;
+    let steps0 = h.out.status.steps;
+    for _ in 0..(seconds / h.dt_s).round() as usize {
+        let s = h.step_with(None, |h| {
+            if let Some(imu) = h.input.imu.as_mut() {
+                imu.gyro_pitch_rad_s += pitch_rate_rad_s;
+            }
+        });
+        if s.state == ControlState::Damping {
+            return Ok((s.trip.unwrap(), h.input.t_s - t0));
+        }
+    }
+    Err((h.out.status.phase, h.out.status.steps - steps0))
+}
+
+#[test]
+fn the_step_timeout_trips_a_held_walk_but_not_a_slow_step() {
+    let setup = Setup::shipped().unwrap();
+    let limit_s = setup.config.safety.stall_timeout_s;
+    // Held (the harness's torso does not move): the phase stops; the step timeout trips once
+    // it has not progressed for the limit.
+    let (trip, after_s) = walk_pitching(0.0, 10.0).unwrap();
+    let Trip::StepTimeout {
+        elapsed_s,
+        limit_s: l,
+    } = trip
+    else {
+        panic!("{trip}")
+    };
+    assert_eq!(l, limit_s);
+    assert!(
+        elapsed_s > limit_s && elapsed_s < limit_s + 0.002,
+        "{elapsed_s}"
+    );
+    assert!(after_s < limit_s + 0.1, "{after_s}");
+    // Pitching backward, the phase runs back: a stall too.
+    assert!(walk_pitching(-0.02, 3.0 * limit_s).is_ok());
+    // Slow: the torso pitching forward at 0.01 rad/s moves the phase on slowly: no trip in
+    // twice the limit, longer than the old timeout (three times the gait's step duration),
+    // the step still under way and its phase well on (from 0.22 at the launch's end).
+    let seconds = 2.0 * limit_s;
+    assert!(seconds > 3.0 * setup.gait.step_duration_s);
+    let (phase, steps) = walk_pitching(0.01, seconds).unwrap_err();
+    assert_eq!(steps, 0);
+    assert!(phase > 0.5 && phase < 1.0, "{phase}");
+}
