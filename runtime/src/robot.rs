@@ -104,27 +104,45 @@ pub fn open(
     }
 }
 
-/// Walk on the robot for `duration_s` on the wall clock, on the buses and IMU [`open`] gave:
-/// every configured motor (held ones too), real-time set-up, telemetry, and the operator's
-/// commands from `operator` (the robot waits in Idle for Start).
+/// How [`walk`] runs on the robot.
+#[derive(Clone, Debug)]
+pub struct RobotRunOptions {
+    /// Run time on the wall clock, s.
+    pub duration_s: f64,
+    /// The MCAP log of the run (decoded samples, operator inputs, every CAN frame).
+    pub log_path: Option<std::path::PathBuf>,
+    /// Zero torque on every motor; the log holds what the controller would have sent.
+    pub dry_run: bool,
+}
+
+/// Walk on the robot on the buses and IMU [`open`] gave: first the pre-flight
+/// ([`crate::bringup::preflight()`]: every motor answers, the IMU is alive and upright, the joints
+/// are near the start pose, the buses have room; a refusal names motor, bus and value and no gain
+/// comes on), then the loop on the wall clock with every configured motor (held ones too),
+/// real-time set-up, telemetry, the log, and the operator's commands from `operator` (the robot
+/// waits in Idle for Start).
 pub fn walk(
     setup: &Setup,
-    backend: WithImu<SocketCanBus, Vn100>,
-    duration_s: f64,
+    mut backend: WithImu<SocketCanBus, Vn100>,
+    options: &RobotRunOptions,
     operator: Option<OperatorReceiver>,
-) -> Result<crate::RunSummary> {
-    let options = LoopOptions {
-        duration_s,
+) -> Result<(crate::RunSummary, crate::bringup::PreflightReport)> {
+    let preflight = crate::bringup::preflight(setup, &mut backend, &mut MonotonicClock, true)?;
+    preflight.refuse()?;
+    let loop_options = LoopOptions {
+        duration_s: options.duration_s,
         with_held: true,
         script: Vec::new(),
-        log_path: None,
+        log_path: options.log_path.clone(),
         publish: true,
         realtime: true,
         start_walking: false,
         stop_after_trip_s: None,
+        dry_run: options.dry_run,
     };
-    let (summary, _backend) = crate::run(setup, backend, MonotonicClock, options, operator)?;
-    Ok(summary)
+    let (summary, _backend) =
+        crate::run(setup, backend, MonotonicClock, loop_options, operator)?;
+    Ok((summary, preflight))
 }
 
 #[cfg(test)]

@@ -215,8 +215,6 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--push", !args.push.is_empty()),
             given("--start", args.start.is_some()),
             given("--script", args.script.is_some()),
-            given("--log", args.log.is_some()),
-            given("--force", args.force),
             given("--seed", args.seed.is_some()),
             given("--real-time", args.real_time),
             given("--keyboard", args.keyboard),
@@ -577,8 +575,15 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
                 .map(|text| runtime::robot::ImuSource::parse(text, "--imu"))
                 .transpose()?;
             // Everything missing is named here, before the operator channel or a motor moves.
+            let log = log.unwrap_or_else(timestamped_log_path);
+            writable(&log, force)?;
             let backend = runtime::robot::open(&setup, &interfaces, imu.as_ref())?;
-            robot_walk(&setup, backend, duration)
+            let options = runtime::robot::RobotRunOptions {
+                duration_s: duration,
+                log_path: Some(log),
+                dry_run,
+            };
+            robot_walk(&setup, backend, &options)
         }
     }
 }
@@ -590,7 +595,7 @@ fn robot_walk(
         drivers::socketcan_bus::SocketCanBus,
         drivers::vn100::port::Vn100,
     >,
-    duration_s: f64,
+    options: &runtime::robot::RobotRunOptions,
 ) -> Result<()> {
     use runtime::operator::{self, SharedHandle};
     let (handle, receiver) = operator::channel(64);
@@ -601,10 +606,15 @@ fn robot_walk(
     println!(
         "on the robot: operator commands with `adam op <command>` (iceoryx2 service {service})"
     );
-    let summary = runtime::robot::walk(setup, backend, duration_s, Some(receiver));
+    let result = runtime::robot::walk(setup, backend, options, Some(receiver));
     stop.store(true, std::sync::atomic::Ordering::Release);
     let _ = forwarder.join();
-    println!("{}", RobotRunReport::of(&summary?));
+    let (summary, preflight) = result?;
+    print!("{preflight}");
+    println!("{}", RobotRunReport::of(&summary));
+    if let Some(path) = &options.log_path {
+        println!("log written: {}", path.display());
+    }
     Ok(())
 }
 
