@@ -76,6 +76,13 @@ pub(crate) struct RunArgs {
     /// --script).
     #[arg(long)]
     dry_run: bool,
+    /// The simulated motors' true zero offsets (joint angle at motor zero, rad, leg order), as
+    /// for `adam calibrate` (sim; default 0).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    sim_offsets: Option<Vec<f64>>,
+    /// A simulated motor mounted the other way round, by joint; repeatable (sim).
+    #[arg(long)]
+    sim_flip: Vec<String>,
 }
 
 /// Arguments of `adam soak`.
@@ -192,6 +199,8 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--real-time", args.real_time),
             given("--keyboard", args.keyboard),
             given("--faults", args.faults.is_some()),
+            given("--sim-offsets", args.sim_offsets.is_some()),
+            given("--sim-flip", !args.sim_flip.is_empty()),
         ]
         .into_iter()
         .flatten()
@@ -408,6 +417,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         can_interfaces,
         faults,
         dry_run,
+        sim_offsets,
+        sim_flip,
     } = args;
     let (gait, config) = (shipped::input(&gait), shipped::input(&config));
     let setup = runtime::Setup::load(&config, &gait)?;
@@ -421,6 +432,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
                 ("--seed", seed.is_some()),
                 ("--real-time", real_time),
                 ("--faults", faults.is_some()),
+                ("--sim-offsets", sim_offsets.is_some()),
+                ("--sim-flip", !sim_flip.is_empty()),
             ]
             .iter()
             .filter_map(|(f, set)| set.then_some(*f))
@@ -494,6 +507,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             };
             // From Stand the gains come on at Start: the pre-flight checks the robot first.
             options.preflight = options.start == runtime::sim::run::SimStart::Stand;
+            options.encoder_mounts =
+                crate::cli::calibrate::sim_mounts(sim_offsets.as_deref(), &sim_flip)?;
             options.script = script;
             options.log_path = log;
             options.seed = seed.unwrap_or(1);
