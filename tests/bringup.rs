@@ -94,6 +94,28 @@ fn calibrate_writes_a_new_config_with_the_offsets_and_the_flip_and_never_in_plac
             && stderr.contains("motor left_knee_pitch (bus 0, id 2): joint at"),
         "{stderr}"
     );
+    // On the robot it was measured on, it passes and Start ramps the robot to Stand.
+    let (ok, stdout, stderr) = adam(&[
+        "run",
+        "--backend",
+        "sim",
+        "--start",
+        "stand",
+        "--duration",
+        "3s",
+        "--config",
+        out_s,
+        "--sim-offsets",
+        "0.5,-0.45,0.4,-0.6",
+        "--sim-flip",
+        "left_knee_pitch",
+    ]);
+    println!("{stdout}{stderr}");
+    assert!(ok, "{stderr}");
+    assert!(
+        stdout.contains("pre-flight: passed") && stdout.contains("final state stand"),
+        "{stdout}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -9,7 +9,7 @@
 
 use crate::backend::WithImu;
 use crate::operator::OperatorReceiver;
-use crate::rt_loop::{LoopOptions, MonotonicClock};
+use crate::bringup::{run_on_robot, PreflightReport, RobotRun};
 use crate::{Result, RuntimeError, Setup};
 use drivers::socketcan_bus::SocketCanBus;
 use drivers::vn100::port::Vn100;
@@ -104,44 +104,19 @@ pub fn open(
     }
 }
 
-/// How [`walk`] runs on the robot.
-#[derive(Clone, Debug)]
-pub struct RobotRunOptions {
-    /// Run time on the wall clock, s.
-    pub duration_s: f64,
-    /// The MCAP log of the run (decoded samples, operator inputs, every CAN frame).
-    pub log_path: Option<std::path::PathBuf>,
-    /// Zero torque on every motor; the log holds what the controller would have sent.
-    pub dry_run: bool,
-}
-
-/// Walk on the robot on the buses and IMU [`open`] gave: first the pre-flight
-/// ([`crate::bringup::preflight()`]: every motor answers, the IMU is alive and upright, the joints
+/// Walk on the robot on the buses and IMU [`open`] gave, as [`crate::bringup::run_on_robot`]
+/// runs it: first the pre-flight (every motor answers, the IMU is alive and upright, the joints
 /// are near the start pose, the buses have room; a refusal names motor, bus and value and no gain
 /// comes on), then the loop on the wall clock with every configured motor (held ones too),
-/// real-time set-up, telemetry, the log, and the operator's commands from `operator` (the robot
-/// waits in Idle for Start).
+/// real-time set-up, telemetry, the log (`run.log_path`), `run.dry_run`, and the operator's
+/// commands from `operator` (the robot waits in Idle for Start).
 pub fn walk(
     setup: &Setup,
-    mut backend: WithImu<SocketCanBus, Vn100>,
-    options: &RobotRunOptions,
+    backend: WithImu<SocketCanBus, Vn100>,
+    run: &RobotRun,
     operator: Option<OperatorReceiver>,
-) -> Result<(crate::RunSummary, crate::bringup::PreflightReport)> {
-    let preflight = crate::bringup::preflight(setup, &mut backend, &mut MonotonicClock, true)?;
-    preflight.refuse()?;
-    let loop_options = LoopOptions {
-        duration_s: options.duration_s,
-        with_held: true,
-        script: Vec::new(),
-        log_path: options.log_path.clone(),
-        publish: true,
-        realtime: true,
-        start_walking: false,
-        stop_after_trip_s: None,
-        dry_run: options.dry_run,
-    };
-    let (summary, _backend) =
-        crate::run(setup, backend, MonotonicClock, loop_options, operator)?;
+) -> Result<(crate::RunSummary, PreflightReport)> {
+    let (preflight, summary, _backend) = run_on_robot(setup, backend, run, operator)?;
     Ok((summary, preflight))
 }
 

@@ -10,7 +10,11 @@
 //! in-process simulator walks (the emulator advances one period per commanded period whatever
 //! the wall clock does). With the simulated clock a reply may take up to
 //! [`UdpRunOptions::reply_timeout`] of wall time (the emulator shares the machine); with the
-//! wall clock the exchange's budget, one period, as on CAN.
+//! wall clock the exchange's budget, one period, as on CAN (20 ms for enable and disable).
+//! The wall-clock loop asks for SCHED_FIFO and busy-polls its sockets, like the CAN loop: give
+//! it a core of its own. An emulator on the same busy machine may then not get the CPU in time
+//! (seen on 2 shared cores at a load of 7–11, as root: the enable's 20 ms passed without a
+//! reply); against `adam emulate motors` use the default lockstep clock.
 
 use crate::backend::Backend;
 use crate::control::OperatorCommand;

@@ -1,5 +1,7 @@
 //! Walk → Stop → Stand → Walk again on the simulated robot (issue #29 item 5), seeds 1–5, on the
-//! belt at the gait's speed and at 0.25 m/s.
+//! belt at the gait's speed and at 0.25 m/s; and a Walk from Stand on a belt already moving
+//! (issue #29 item 6: the launch on an endless belt holds; on the 1.6 m belt, and with the belt
+//! started after the robot walks, it does not yet: ignored tests with what was measured).
 //!
 //! What broke: with the braking step 0.30 m long, Stand after the Stop stood on feet 0.34 m
 //! apart with the torso midway; the launch of the second Walk carries the torso to 4 cm behind
@@ -12,8 +14,11 @@
 use drivers::sim::robot::SimEvent;
 use runtime::control::{ControlState, OperatorCommand};
 use runtime::rt_loop::{LoopOptions, SimulatedClock};
-use runtime::sim::run::{sim_backend, SimWalkOptions};
+use runtime::sim::run::{sim_backend, walk, SimStart, SimWalkOptions, SimWalkReport};
+use runtime::sim::treadmill::BeltProfile;
 use runtime::Setup;
+
+mod common;
 
 /// Walks from the planned state, Stop at 3 s, Walk at 10 s, to 20 s: no trip, no fall, the
 /// states in order, and at least 8 steps after the second Walk.
@@ -78,5 +83,75 @@ fn walk_after_a_stop_walks_again() {
 fn walk_after_a_stop_walks_again_on_a_belt_at_a_quarter_metre_per_second() {
     for seed in 1..=5 {
         walk_stop_walk(seed, Some(0.25));
+    }
+}
+
+/// From Stand (the Ramp from t = 0 reaches it at 2 s), Walk at 2.1 s on a belt of `length_m`
+/// moving at 0.25 m/s from the start (or following `profile`), to 15 s.
+fn walk_from_stand(
+    setup: &Setup,
+    seed: u64,
+    length_m: f64,
+    profile: Option<&str>,
+) -> SimWalkReport {
+    let mut options = SimWalkOptions::new(15.0);
+    options.seed = seed;
+    options.start = SimStart::Stand;
+    options.belt_length_m = length_m;
+    match profile {
+        Some(p) => options.belt_profile = Some(BeltProfile::parse(p, "test").expect("profile")),
+        None => options.belt_speed_mps = Some(0.25),
+    }
+    options.script = vec![(2.1, OperatorCommand::Walk)];
+    walk(setup, &options).expect("walk")
+}
+
+fn assert_walks_on(r: &SimWalkReport, context: &str) {
+    assert_eq!(r.summary.trip, None, "{context}");
+    assert!(r.fall.is_none(), "{:?} {context}", r.fall);
+    assert_eq!(r.summary.final_state, ControlState::Walk, "{context}");
+    // The launch (1 s), then at least 12 steps in the 11.9 s left.
+    assert!(r.steps >= 12, "{} steps, {context}", r.steps);
+}
+
+/// The launch from Stand onto a belt already at 0.25 m/s, with and without speed control
+/// (the gait library), seeds 1–5, on an endless belt (the subject is the controller's
+/// launch; on the 1.6 m belt see the ignored test below). Measured: 14–17 steps, no trip.
+#[test]
+fn walk_from_stand_on_a_moving_belt_walks() {
+    for (name, setup) in [
+        ("one gait", Setup::shipped().expect("setup")),
+        ("library", common::library_setup()),
+    ] {
+        for seed in 1..=5 {
+            let r = walk_from_stand(&setup, seed, f64::INFINITY, None);
+            assert_walks_on(&r, &format!("{name}, seed {seed}"));
+        }
+    }
+}
+
+/// Issue #29 item 6 on the 1.6 m belt. Not met: the belt carries the standing robot 0.5 m back
+/// during the 2 s Ramp and the launch's 1 s in double support takes it past the back end at
+/// 2.8–2.9 s (hip 0.69–0.73 m behind the centre), seeds 1–5 with and without the library. The
+/// launch would have to step sooner (or the robot stand further forward) on a moving belt.
+#[test]
+#[ignore = "issue #29 item 6: Walk from Stand on a 1.6 m belt already at 0.25 m/s goes off its back (measured 5 of 5 seeds)"]
+fn walk_from_stand_on_the_moving_belt_stays_on_it() {
+    for seed in 1..=5 {
+        let r = walk_from_stand(&common::library_setup(), seed, 1.6, None);
+        assert_walks_on(&r, &format!("seed {seed}"));
+    }
+}
+
+/// Issue #29 item 6: the belt started after the robot walks (`--belt "0:0,5:0.25"`, 0.5 m/s²),
+/// with speed control. Not met: the robot walks the still belt at the library's slowest gait
+/// (0.15 m/s), then after the belt starts it stalls: the step timeout trips at 8.4–10.3 s,
+/// seeds 1–5 (hip 0.16–0.75 m behind the centre).
+#[test]
+#[ignore = "issue #29 item 6: with the belt started after the walk, the walk stalls (step timeout, 5 of 5 seeds)"]
+fn walk_on_a_belt_started_after_the_walk() {
+    for seed in 1..=5 {
+        let r = walk_from_stand(&common::library_setup(), seed, 1.6, Some("0:0,5:0.25"));
+        assert_walks_on(&r, &format!("seed {seed}"));
     }
 }

@@ -57,7 +57,7 @@ enum Backend {
 }
 
 /// The simulated motors' mounts from `--sim-offsets` and `--sim-flip`.
-fn sim_mounts(offsets: Option<&[f64]>, flips: &[String]) -> Result<[EncoderMount; 4]> {
+pub(crate) fn sim_mounts(offsets: Option<&[f64]>, flips: &[String]) -> Result<[EncoderMount; 4]> {
     let mut mounts = [EncoderMount::default(); 4];
     if let Some(offsets) = offsets {
         if offsets.len() != 4 {

@@ -62,10 +62,19 @@ impl std::fmt::Display for EmulatorReport {
             "emulated {} control periods ({:.3} s simulated); ended: {}",
             self.periods, self.sim_time_s, self.ended
         )?;
+        if self.steps > 0 {
+            write!(
+                f,
+                "steps {} (mean length {:.4} m)",
+                self.steps, self.mean_step_length_m
+            )?;
+        } else {
+            write!(f, "steps 0")?;
+        }
         writeln!(
             f,
-            "steps {} (mean length {:.4} m); position on the belt {:+.3} m",
-            self.steps, self.mean_step_length_m, self.position_on_belt_m
+            "; position on the belt {:+.3} m",
+            self.position_on_belt_m
         )?;
         match self.fall {
             Some((t, what)) => writeln!(f, "fall: {what} at {t:.3} s")?,

@@ -84,6 +84,13 @@ pub(crate) struct RunArgs {
     /// --script).
     #[arg(long)]
     dry_run: bool,
+    /// The simulated motors' true zero offsets (joint angle at motor zero, rad, leg order), as
+    /// for `adam calibrate` (sim; default 0).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    sim_offsets: Option<Vec<f64>>,
+    /// A simulated motor mounted the other way round, by joint; repeatable (sim).
+    #[arg(long)]
+    sim_flip: Vec<String>,
 }
 
 /// Arguments of `adam soak`.
@@ -205,6 +212,8 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--can-interfaces", args.can_interfaces.is_some()),
             given("--faults", args.faults.is_some()),
             given("--imu", args.imu.is_some()),
+            given("--sim-offsets", args.sim_offsets.is_some()),
+            given("--sim-flip", !args.sim_flip.is_empty()),
         ]
         .into_iter()
         .flatten()
@@ -220,6 +229,8 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--keyboard", args.keyboard),
             given("--faults", args.faults.is_some()),
             given("--motors", args.motors.is_some()),
+            given("--sim-offsets", args.sim_offsets.is_some()),
+            given("--sim-flip", !args.sim_flip.is_empty()),
         ]
         .into_iter()
         .flatten()
@@ -439,6 +450,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         motors,
         faults,
         dry_run,
+        sim_offsets,
+        sim_flip,
     } = args;
     let (gait, config) = (shipped::input(&gait), shipped::input(&config));
     let setup = runtime::Setup::load(&config, &gait)?;
@@ -452,6 +465,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
                 ("--seed", seed.is_some()),
                 ("--real-time", real_time),
                 ("--faults", faults.is_some()),
+                ("--sim-offsets", sim_offsets.is_some()),
+                ("--sim-flip", !sim_flip.is_empty()),
             ]
             .iter()
             .filter_map(|(f, set)| set.then_some(*f))
@@ -525,6 +540,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             };
             // From Stand the gains come on at Start: the pre-flight checks the robot first.
             options.preflight = options.start == runtime::sim::run::SimStart::Stand;
+            options.encoder_mounts =
+                crate::cli::calibrate::sim_mounts(sim_offsets.as_deref(), &sim_flip)?;
             options.script = script;
             options.log_path = log;
             options.seed = seed.unwrap_or(1);
@@ -578,10 +595,11 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             let log = log.unwrap_or_else(timestamped_log_path);
             writable(&log, force)?;
             let backend = runtime::robot::open(&setup, &interfaces, imu.as_ref())?;
-            let options = runtime::robot::RobotRunOptions {
+            let options = runtime::bringup::RobotRun {
                 duration_s: duration,
-                log_path: Some(log),
                 dry_run,
+                with_held: true,
+                log_path: Some(log),
             };
             robot_walk(&setup, backend, &options)
         }
@@ -595,7 +613,7 @@ fn robot_walk(
         drivers::socketcan_bus::SocketCanBus,
         drivers::vn100::port::Vn100,
     >,
-    options: &runtime::robot::RobotRunOptions,
+    options: &runtime::bringup::RobotRun,
 ) -> Result<()> {
     use runtime::operator::{self, SharedHandle};
     let (handle, receiver) = operator::channel(64);
