@@ -177,6 +177,27 @@ fn opening_names_the_peer_and_bus_and_addresses_follow_the_port_rule() {
     assert!(drivers::udp::bus_addresses(&[a, b], 3).is_none());
     let top: SocketAddr = "127.0.0.1:65535".parse().unwrap();
     assert!(drivers::udp::bus_addresses(&[top], 2).is_none());
+    // A fixed local port (what a gateway's cannelloni sends to): bus k at its port + k.
+    // (A port the OS just freed, and the one after it; another try if that one is taken.)
+    let (bus, local) = (0..20)
+        .find_map(|_| {
+            let free = UdpSocket::bind("127.0.0.1:0")
+                .unwrap()
+                .local_addr()
+                .unwrap();
+            UdpBus::open_at(&[a, a], Some(free)).ok().map(|b| (b, free))
+        })
+        .unwrap();
+    assert_eq!(bus.local_addr(0).unwrap(), local);
+    assert_eq!(bus.local_addr(1).unwrap().port(), local.port() + 1);
+    let taken = UdpBus::open_at(&[a], Some(local))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        taken.contains("bus 0") && taken.contains("127.0.0.1:9000"),
+        "{taken}"
+    );
 }
 
 /// The emulator's side: a stranger's datagram (here a *disable* to every motor) is dropped and

@@ -44,6 +44,9 @@ pub struct UdpRunOptions {
     pub reply_timeout: Duration,
     /// Write an MCAP log here.
     pub log_path: Option<PathBuf>,
+    /// Bind bus 0's socket here, bus `k`'s at its port + `k` (what a gateway's cannelloni
+    /// sends to); `None`: ports the OS picks.
+    pub bind: Option<SocketAddr>,
 }
 
 impl UdpRunOptions {
@@ -56,13 +59,19 @@ impl UdpRunOptions {
             real_time: false,
             reply_timeout: Duration::from_millis(100),
             log_path: None,
+            bind: None,
         }
     }
 }
 
 /// Open one link per bus of the config: `addrs` one per bus, or one address whose port + `k`
 /// is bus `k`'s ([`drivers::udp::bus_addresses`]).
-pub fn open_udp(setup: &Setup, addrs: &[SocketAddr], origin: &str) -> Result<UdpBus> {
+pub fn open_udp(
+    setup: &Setup,
+    addrs: &[SocketAddr],
+    bind: Option<SocketAddr>,
+    origin: &str,
+) -> Result<UdpBus> {
     let bus_count = setup.config.loop_.bus_count;
     let peers = drivers::udp::bus_addresses(addrs, bus_count).ok_or_else(|| {
         RuntimeError::InvalidField {
@@ -81,7 +90,7 @@ pub fn open_udp(setup: &Setup, addrs: &[SocketAddr], origin: &str) -> Result<Udp
             ),
         }
     })?;
-    UdpBus::open(&peers).map_err(|e| RuntimeError::InvalidField {
+    UdpBus::open_at(&peers, bind).map_err(|e| RuntimeError::InvalidField {
         origin: origin.into(),
         field: "address".into(),
         value: addrs
@@ -100,7 +109,7 @@ pub fn walk(
     addrs: &[SocketAddr],
     options: &UdpRunOptions,
 ) -> Result<(RunSummary, drivers::udp::LinkStats)> {
-    let mut bus = open_udp(setup, addrs, "--motors")?;
+    let mut bus = open_udp(setup, addrs, options.bind, "--motors")?;
     if !options.real_time {
         bus.set_reply_timeout(Some(options.reply_timeout));
     }

@@ -111,8 +111,15 @@ fn local_for(peer: &SocketAddr) -> SocketAddr {
 }
 
 impl UdpBus {
-    /// Open one link per peer (bus index = position), each on its own nonblocking socket.
+    /// Open one link per peer (bus index = position), each on its own nonblocking socket at a
+    /// port the OS picks.
     pub fn open(peers: &[SocketAddr]) -> Result<Self, UdpOpenError> {
+        Self::open_at(peers, None)
+    }
+
+    /// [`UdpBus::open`], bus `k`'s socket bound at `local`'s port + `k` (a cannelloni gateway
+    /// sends to a fixed port: its `-r`); `None`: ports the OS picks.
+    pub fn open_at(peers: &[SocketAddr], local: Option<SocketAddr>) -> Result<Self, UdpOpenError> {
         if peers.is_empty() {
             return Err(UdpOpenError::NoPeer);
         }
@@ -121,7 +128,20 @@ impl UdpBus {
             .enumerate()
             .map(|(bus, &peer)| {
                 let fail = |source| UdpOpenError::Socket { bus, peer, source };
-                let socket = UdpSocket::bind(local_for(&peer)).map_err(fail)?;
+                let at = match local {
+                    Some(first) => {
+                        let port =
+                            u16::try_from(usize::from(first.port()) + bus).map_err(|_| {
+                                fail(io::Error::new(
+                                    io::ErrorKind::InvalidInput,
+                                    "port past 65535",
+                                ))
+                            })?;
+                        SocketAddr::new(first.ip(), port)
+                    }
+                    None => local_for(&peer),
+                };
+                let socket = UdpSocket::bind(at).map_err(fail)?;
                 socket.set_nonblocking(true).map_err(fail)?;
                 Ok(Link {
                     socket,

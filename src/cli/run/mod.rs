@@ -75,6 +75,10 @@ pub(crate) struct RunArgs {
     /// per bus, comma separated; e.g. `adam emulate motors --listen 127.0.0.1:PORT`'s.
     #[arg(long, value_delimiter = ',')]
     motors: Option<Vec<std::net::SocketAddr>>,
+    /// This end's UDP address for bus 0, bus k at its port + k (udp; default: ports the OS
+    /// picks); a cannelloni gateway sends to a fixed port (its `-r`).
+    #[arg(long)]
+    bind: Option<std::net::SocketAddr>,
     /// Inject faults (sim): a profile name (none, loss-0.1, loss-1, loss-10, corrupt-1,
     /// delay-1, soak, rough) or a TOML file; seeded by --seed.
     #[arg(long)]
@@ -199,6 +203,7 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--can-interfaces", args.can_interfaces.is_some()),
             given("--imu", args.imu.is_some()),
             given("--motors", args.motors.is_some()),
+            given("--bind", args.bind.is_some()),
         ]
         .into_iter()
         .flatten()
@@ -231,6 +236,7 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--motors", args.motors.is_some()),
             given("--sim-offsets", args.sim_offsets.is_some()),
             given("--sim-flip", !args.sim_flip.is_empty()),
+            given("--bind", args.bind.is_some()),
         ]
         .into_iter()
         .flatten()
@@ -448,6 +454,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         can_interfaces,
         imu,
         motors,
+        bind,
         faults,
         dry_run,
         sim_offsets,
@@ -568,6 +575,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
                 .transpose()?
                 .unwrap_or_default();
             options.real_time = real_time;
+            options.bind = bind;
             options.log_path = log.clone();
             let (summary, link) = runtime::udp::walk(&setup, &motors, &options)?;
             println!("{}", RobotRunReport::of(&summary));
