@@ -8,8 +8,8 @@
 //! port, no `--imu` at all) is reported in one error that names each.
 
 use crate::backend::WithImu;
-use crate::operator::OperatorReceiver;
 use crate::bringup::{run_on_robot, PreflightReport, RobotRun};
+use crate::operator::OperatorReceiver;
 use crate::{Result, RuntimeError, Setup};
 use drivers::socketcan_bus::SocketCanBus;
 use drivers::vn100::port::Vn100;

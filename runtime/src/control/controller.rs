@@ -62,6 +62,7 @@ use crate::estimator::{EstimatorParams, PitchEstimator};
 use crate::safety::{ProgressWatch, SafetyInput, SafetyMonitor, Trip};
 use crate::slots::{MotorSample, SlotLayout, LEG_SLOTS, OUTPUTS, SLOTS};
 use crate::{Result, RuntimeError};
+use drivers::imu::ImuSample;
 use model::gait::GaitFile;
 use model::robot::{Legs, MAX_DOF};
 use model::{PlanarModel, Side};
@@ -457,8 +458,15 @@ impl Controller {
             leg_dq[k] = self.layout.model_rate_rad_s(k, self.motors[k].dq_rad_s);
         }
         // Estimator.
-        // An implausible sample (a glitch; safety counts them) is not integrated.
-        if let Some(imu) = input.imu.as_ref().filter(|i| self.safety.gyro_plausible(i)) {
+        // An implausible sample (a glitch; safety counts them) is not integrated, nor is a sample
+        // already integrated: an IMU slower than the loop (a VN-100 at 800 Hz under a 1 kHz loop)
+        // hands the same sample, with its own time stamp, to the next tick too.
+        let already_used = |i: &ImuSample| self.last_imu_t_s == Some(i.t_s);
+        if let Some(imu) = input
+            .imu
+            .as_ref()
+            .filter(|i| self.safety.gyro_plausible(i) && !already_used(i))
+        {
             let dt = self.last_imu_t_s.map_or(0.0, |t0| imu.t_s - t0);
             let walking = matches!(self.state, ControlState::Walk | ControlState::Stop);
             self.estimator.update_with(

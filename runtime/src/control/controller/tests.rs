@@ -519,3 +519,33 @@ fn the_step_timeout_trips_a_held_walk_but_not_a_slow_step() {
     assert_eq!(steps, 0);
     assert!(phase > 0.5 && phase < 1.0, "{phase}");
 }
+
+/// An IMU slower than the loop hands the same sample (its own time stamp) to two ticks: the
+/// estimator integrates it once, exactly as if the second tick had no sample at all.
+#[test]
+fn a_repeated_imu_sample_is_integrated_once() {
+    let mut repeated = Harness::new(PhaseSource::TimeBased);
+    let mut missing = Harness::new(PhaseSource::TimeBased);
+    // Tilted 0.05 rad from the gait's pitch: the accelerometer corrections carry weight.
+    repeated.pitch_rad += 0.05;
+    missing.pitch_rad += 0.05;
+    let mut last: Option<ImuSample> = None;
+    for tick in 0..400 {
+        let odd = tick % 2 == 1;
+        repeated.step_with(None, |h| {
+            if odd {
+                h.input.imu = last;
+            }
+        });
+        last = repeated.input.imu;
+        missing.step_with(None, |h| {
+            if odd {
+                h.input.imu = None;
+            }
+        });
+    }
+    let (a, b) = (&repeated.c.estimator, &missing.c.estimator);
+    assert_eq!(a.pitch_rad().to_bits(), b.pitch_rad().to_bits());
+    assert_eq!(a.gyro_bias_rad_s().to_bits(), b.gyro_bias_rad_s().to_bits());
+    assert_eq!(a.pitch_sigma_rad().to_bits(), b.pitch_sigma_rad().to_bits());
+}
