@@ -25,7 +25,7 @@ pub(crate) const RUNTIME_CONFIG: &str = "configs/runtime/adam.toml";
 pub(crate) const CONFIG_DIR_ENV: &str = "ADAM_CONFIG_DIR";
 
 /// The files shipped in `configs/`, embedded: (path under `configs/`, contents).
-const EMBEDDED: [(&str, &str); 13] = [
+const EMBEDDED: [(&str, &str); 15] = [
     (
         "runtime/adam.toml",
         include_str!("../../configs/runtime/adam.toml"),
@@ -41,6 +41,14 @@ const EMBEDDED: [(&str, &str); 13] = [
     (
         "gaits/adam_library.json",
         include_str!("../../configs/gaits/adam_library.json"),
+    ),
+    (
+        "planner/adam_speeds_library.toml",
+        include_str!("../../configs/planner/adam_speeds_library.toml"),
+    ),
+    (
+        "robots/adam_codesign_speeds.urdf",
+        include_str!("../../configs/robots/adam_codesign_speeds.urdf"),
     ),
     (
         "planner/adam_electrical.toml",
