@@ -60,6 +60,25 @@ impl Lifecycle {
             Lifecycle::Active => "active",
         }
     }
+
+    /// `Ok` if `operation` may start from this state: configure from any state but active,
+    /// activate only once configured, deactivate once configured or active; otherwise the
+    /// error naming both. Every [`MotorBus`] guards its lifecycle with it.
+    pub fn allows(self, operation: Operation) -> Result<()> {
+        let allowed = match operation {
+            Operation::Configure => self != Lifecycle::Active,
+            Operation::Activate => self == Lifecycle::Configured,
+            Operation::Deactivate => self != Lifecycle::Unconfigured,
+        };
+        if allowed {
+            Ok(())
+        } else {
+            Err(BusError::WrongState {
+                operation,
+                state: self,
+            })
+        }
+    }
 }
 
 /// Lifecycle operations, to name the one that was called in the wrong state.

@@ -132,6 +132,22 @@ impl FrameLog {
     pub fn overflowed(&self) -> u32 {
         self.overflowed
     }
+
+    /// Appends `other`'s frames after these (what does not fit is counted as overflowed), e.g.
+    /// the disable round a bus sends after a failed enable, kept beside the enable round.
+    pub fn append(&mut self, other: &FrameLog) {
+        for f in other.frames() {
+            let offset = Duration::from_nanos(u64::from(f.offset_ns));
+            self.record(
+                usize::from(f.bus),
+                f.direction,
+                offset,
+                f.can_id,
+                f.payload(),
+            );
+        }
+        self.overflowed = self.overflowed.saturating_add(other.overflowed);
+    }
 }
 
 #[cfg(test)]
@@ -171,5 +187,35 @@ mod tests {
         log.clear();
         assert!(log.frames().is_empty());
         assert_eq!(log.overflowed(), 0);
+    }
+
+    #[test]
+    fn appending_keeps_both_in_order_and_counts_what_does_not_fit() {
+        let mut enable = FrameLog::default();
+        enable.record(0, FrameDirection::Tx, Duration::from_micros(1), 0x81, &[1]);
+        let mut disable = FrameLog::default();
+        disable.record(
+            1,
+            FrameDirection::Tx,
+            Duration::from_micros(2),
+            0x82,
+            &[2, 3],
+        );
+        disable.record(1, FrameDirection::Rx, Duration::from_micros(4), 0x182, &[4]);
+        let expected: Vec<LoggedFrame> = enable
+            .frames()
+            .iter()
+            .chain(disable.frames())
+            .copied()
+            .collect();
+        enable.append(&disable);
+        assert_eq!(enable.frames(), &expected[..]);
+        let mut full = FrameLog::default();
+        for _ in 0..FRAME_LOG_CAPACITY - 1 {
+            full.record(0, FrameDirection::Tx, Duration::ZERO, 0x100, &[]);
+        }
+        full.append(&disable);
+        assert_eq!(full.frames().len(), FRAME_LOG_CAPACITY);
+        assert_eq!(full.overflowed(), 1);
     }
 }

@@ -36,13 +36,14 @@ pub const LIFECYCLE_TIMEOUT: Duration = Duration::from_millis(20);
 /// Opening an interface failed.
 #[derive(Debug, Error)]
 pub enum OpenError {
-    /// The OS refused to open or set up the socket.
-    #[error("cannot open CAN interface `{interface}`: {source}")]
+    /// The OS refused to open or set up the socket. The OS error is part of the message, not
+    /// a `source`, so that an error chain printed whole names it once.
+    #[error("cannot open CAN interface `{interface}`: {os_error}")]
     Open {
         /// Interface name, e.g. `can0`.
         interface: String,
         /// The OS error.
-        source: io::Error,
+        os_error: io::Error,
     },
     /// No interface given.
     #[error("no CAN interface given")]
@@ -125,9 +126,9 @@ impl SocketCanBus {
         let opened = interfaces
             .iter()
             .map(|&name| {
-                let fail = |source| OpenError::Open {
+                let fail = |os_error| OpenError::Open {
                     interface: name.to_owned(),
-                    source,
+                    os_error,
                 };
                 let socket = CanSocket::open(name).map_err(fail)?;
                 socket.set_nonblocking(true).map_err(fail)?;
@@ -335,26 +336,20 @@ impl MotorBus for SocketCanBus {
     }
 
     fn configure(&mut self, motors: &[MotorSpec]) -> Result<(), BusError> {
-        if self.state == Lifecycle::Active {
-            return Err(BusError::WrongState {
-                operation: Operation::Configure,
-                state: self.state,
-            });
-        }
+        self.state.allows(Operation::Configure)?;
         self.table = MotorTable::new(motors, self.interfaces.len())?;
         self.state = Lifecycle::Configured;
         Ok(())
     }
 
     fn activate(&mut self) -> Result<(), BusError> {
-        if self.state != Lifecycle::Configured {
-            return Err(BusError::WrongState {
-                operation: Operation::Activate,
-                state: self.state,
-            });
-        }
+        self.state.allows(Operation::Activate)?;
         if let Err(e) = self.special_to_all(Special::Enable) {
+            // Leave nothing half enabled; the frame log keeps both rounds.
+            let enable_frames = self.frames;
             let _ = self.special_to_all(Special::Disable);
+            let disable_frames = core::mem::replace(&mut self.frames, enable_frames);
+            self.frames.append(&disable_frames);
             return Err(e);
         }
         self.state = Lifecycle::Active;
@@ -382,12 +377,7 @@ impl MotorBus for SocketCanBus {
     }
 
     fn deactivate(&mut self) -> Result<(), BusError> {
-        if self.state == Lifecycle::Unconfigured {
-            return Err(BusError::WrongState {
-                operation: Operation::Deactivate,
-                state: self.state,
-            });
-        }
+        self.state.allows(Operation::Deactivate)?;
         self.state = Lifecycle::Configured;
         self.special_to_all(Special::Disable)
     }
@@ -422,6 +412,9 @@ mod tests {
                 eprintln!("{text}");
                 assert!(text.contains("`can0`"), "{text}");
                 assert!(text.contains("os error"), "{text}");
+                // Printed as a chain (`{:#}`, as the CLI does), the OS error still appears once.
+                assert!(std::error::Error::source(&e).is_none(), "{text}");
+                assert_eq!(text.matches("os error").count(), 1, "{text}");
             }
         }
         assert!(matches!(

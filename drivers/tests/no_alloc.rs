@@ -13,34 +13,12 @@ use drivers::sim::bus::{SimBus, SimConfig};
 use drivers::sim::firmware::{A1Model, SimMotor};
 use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
 use drivers::sim::robot::{RobotSimConfig, SimEvent};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 
-struct Counting;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    /// Allocations counted on this thread.
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.try_with(Cell::get).unwrap_or(false) {
-            let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
-        }
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: counting_alloc::Counting = counting_alloc::Counting;
 
 #[test]
 fn exchange_allocates_nothing() {
@@ -76,13 +54,12 @@ fn exchange_allocates_nothing() {
         .map(|s| Command::pd(s.id, 0.1, 0.0, 60.0, 1.5, 0.0))
         .collect();
     let mut replies: Vec<_> = specs.iter().map(|s| Reply::zeroed(s.id)).collect();
-    COUNTING.with(|c| c.set(true));
+    counting_alloc::start();
     for _ in 0..500 {
         bus.exchange(&commands, &mut replies, Duration::from_millis(1))
             .unwrap();
     }
-    COUNTING.with(|c| c.set(false));
-    let during = ALLOCATIONS.with(Cell::get);
+    let during = counting_alloc::stop();
     assert_eq!(during, 0, "{during} allocations in 500 exchanges");
 }
 
@@ -98,7 +75,7 @@ fn exchange_with_the_simulated_robot_allocates_nothing() {
     } = common::standing_rig(RobotSimConfig::default(), 1);
     let knee = knees[0];
     let mut commands = Vec::with_capacity(motors.len());
-    COUNTING.with(|c| c.set(true));
+    counting_alloc::start();
     // Stand for 0.25 s, then lift the left foot for 0.15 s and put it down: held and fresh
     // dynamics, a liftoff and a touchdown.
     for k in 0..600 {
@@ -121,8 +98,7 @@ fn exchange_with_the_simulated_robot_allocates_nothing() {
         bus.exchange(&commands, &mut replies, Duration::from_millis(1))
             .unwrap();
     }
-    COUNTING.with(|c| c.set(false));
-    let during = ALLOCATIONS.with(Cell::get);
+    let during = counting_alloc::stop();
     let events = bus.plant().events();
     assert!(
         events.iter().any(|e| matches!(e, SimEvent::Liftoff { .. })),

@@ -12,42 +12,14 @@ use drivers::sim::firmware::{A1Model, SimMotor};
 use drivers::sim::plant::{InertiaDampingPlant, RigidJoint};
 use drivers::udp::serve::MotorServer;
 use drivers::udp::UdpBus;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-struct Counting;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.try_with(Cell::get).unwrap_or(false) {
-            let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
-        }
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if COUNTING.try_with(Cell::get).unwrap_or(false) {
-            let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
-        }
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: counting_alloc::Counting = counting_alloc::Counting;
 
 #[test]
 fn udp_exchange_allocates_nothing() {
@@ -99,15 +71,14 @@ fn udp_exchange_allocates_nothing() {
     let mut replies: Vec<Reply> = specs.iter().map(|s| Reply::zeroed(s.id)).collect();
     let mut frames_seen = 0;
     let mut sample = ImuSample::default();
-    COUNTING.with(|c| c.set(true));
+    counting_alloc::start();
     for _ in 0..2000 {
         bus.exchange(&commands, &mut replies, Duration::from_millis(1))
             .unwrap();
         frames_seen += bus.frames().len();
         let _ = bus.read(&mut sample);
     }
-    COUNTING.with(|c| c.set(false));
-    let allocations = ALLOCATIONS.with(Cell::get);
+    let allocations = counting_alloc::stop();
     bus.deactivate().unwrap();
     stop.store(true, Ordering::Release);
     let stats = peer.join().unwrap();

@@ -7,34 +7,13 @@ use drivers::imu::Imu;
 use drivers::vn100::emulator::{serve, Emulator, EmulatorOptions, Pty};
 use drivers::vn100::port::Vn100;
 use drivers::vn100::Vn100Options;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::time::{Duration, Instant};
 
-struct Counting;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.try_with(Cell::get).unwrap_or(false) {
-            let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
-        }
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
+#[path = "common/counting_alloc.rs"]
+mod counting_alloc;
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: counting_alloc::Counting = counting_alloc::Counting;
 
 #[test]
 fn reading_the_vn100_allocates_nothing() {
@@ -53,14 +32,13 @@ fn reading_the_vn100_allocates_nothing() {
     let mut driver = Vn100::open(&path, &Vn100Options::default()).unwrap();
     let start = Instant::now();
     let mut t = 0.0;
-    COUNTING.with(|c| c.set(true));
+    counting_alloc::start();
     while start.elapsed() < Duration::from_secs(1) {
         t += 1e-3;
         let _ = driver.read_at(t);
         std::thread::sleep(Duration::from_micros(500));
     }
-    COUNTING.with(|c| c.set(false));
-    let allocations = ALLOCATIONS.with(Cell::get);
+    let allocations = counting_alloc::stop();
     let stats = driver.stats();
     // Keep reading until the emulator is done: a full pty would block its writes.
     while !emulator.is_finished() {

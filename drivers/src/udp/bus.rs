@@ -396,40 +396,20 @@ impl MotorBus for UdpBus {
     }
 
     fn configure(&mut self, motors: &[MotorSpec]) -> Result<(), BusError> {
-        if self.state == Lifecycle::Active {
-            return Err(BusError::WrongState {
-                operation: Operation::Configure,
-                state: self.state,
-            });
-        }
+        self.state.allows(Operation::Configure)?;
         self.table = MotorTable::new(motors, self.links.len())?;
         self.state = Lifecycle::Configured;
         Ok(())
     }
 
     fn activate(&mut self) -> Result<(), BusError> {
-        if self.state != Lifecycle::Configured {
-            return Err(BusError::WrongState {
-                operation: Operation::Activate,
-                state: self.state,
-            });
-        }
+        self.state.allows(Operation::Activate)?;
         if let Err(e) = self.special_to_all(Special::Enable) {
+            // Leave nothing half enabled; the frame log keeps both rounds.
             let enable_frames = self.frames;
             let _ = self.special_to_all(Special::Disable);
-            // Keep both rounds in the record: enable, then the disable that undid it.
-            let disable_frames = self.frames;
-            self.frames = enable_frames;
-            for f in disable_frames.frames() {
-                let offset = Duration::from_nanos(u64::from(f.offset_ns));
-                self.frames.record(
-                    usize::from(f.bus),
-                    f.direction,
-                    offset,
-                    f.can_id,
-                    f.payload(),
-                );
-            }
+            let disable_frames = core::mem::replace(&mut self.frames, enable_frames);
+            self.frames.append(&disable_frames);
             return Err(e);
         }
         self.state = Lifecycle::Active;
@@ -458,12 +438,7 @@ impl MotorBus for UdpBus {
     }
 
     fn deactivate(&mut self) -> Result<(), BusError> {
-        if self.state == Lifecycle::Unconfigured {
-            return Err(BusError::WrongState {
-                operation: Operation::Deactivate,
-                state: self.state,
-            });
-        }
+        self.state.allows(Operation::Deactivate)?;
         self.state = Lifecycle::Configured;
         self.special_to_all(Special::Disable)
     }
