@@ -21,6 +21,7 @@
 
 use super::cannelloni::{Packet, PacketWriter, MAX_PACKET_LEN};
 use super::imu_frames::ImuAssembler;
+use super::socket::recv_waiting;
 use crate::a1::{self, Frame, FrameKind, Special};
 use crate::bus::{
     BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation, MAX_MOTORS,
@@ -189,14 +190,14 @@ impl UdpBus {
 
     fn drain(&mut self) -> Result<(), BusError> {
         for (bus, link) in self.links.iter().enumerate() {
-            loop {
-                match link.socket.recv_from(&mut self.recv_buf) {
-                    Ok((_, from)) if from == link.peer => self.stats.stale += 1,
-                    Ok(_) => self.stats.foreign_sender += 1,
-                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
-                    // A previous send's ICMP "port unreachable" surfaces here on Linux.
-                    Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => break,
-                    Err(e) => return Err(Self::io_error(bus, &e)),
+            // A previous send's ICMP "port unreachable" surfaces here on Linux: nothing waits.
+            while let Some((_, from)) = recv_waiting(&link.socket, &mut self.recv_buf)
+                .map_err(|e| Self::io_error(bus, &e))?
+            {
+                if from == link.peer {
+                    self.stats.stale += 1;
+                } else {
+                    self.stats.foreign_sender += 1;
                 }
             }
         }
@@ -277,16 +278,9 @@ impl UdpBus {
             let mut idle = true;
             for bus in 0..self.links.len() {
                 let link = &self.links[bus];
-                let (n, from) = match link.socket.recv_from(&mut self.recv_buf) {
-                    Ok(r) => r,
-                    Err(e)
-                        if matches!(
-                            e.kind(),
-                            io::ErrorKind::WouldBlock | io::ErrorKind::ConnectionRefused
-                        ) =>
-                    {
-                        continue
-                    }
+                let (n, from) = match recv_waiting(&link.socket, &mut self.recv_buf) {
+                    Ok(Some(r)) => r,
+                    Ok(None) => continue,
                     Err(e) => return Err(Self::io_error(bus, &e)),
                 };
                 idle = false;

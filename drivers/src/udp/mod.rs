@@ -58,6 +58,7 @@ mod bus;
 pub mod cannelloni;
 pub mod imu_frames;
 pub mod serve;
+mod socket;
 
 pub use bus::{LinkStats, UdpBus, UdpOpenError, LIFECYCLE_TIMEOUT};
 

@@ -18,6 +18,7 @@
 
 use super::cannelloni::{Packet, PacketWriter, MAX_PACKET_LEN};
 use super::imu_frames;
+use super::socket::recv_waiting;
 use crate::a1::{self, FrameKind};
 use crate::bus::MAX_MOTORS;
 use crate::imu::{Imu, ImuSample};
@@ -153,19 +154,7 @@ impl<P: ServedPlant> MotorServer<P> {
     pub fn poll(&mut self, idle: Duration) -> io::Result<usize> {
         let mut handled = 0;
         for bus in 0..self.sockets.len() {
-            loop {
-                let (n, from) = match self.sockets[bus].recv_from(&mut self.recv_buf) {
-                    Ok(r) => r,
-                    Err(e)
-                        if matches!(
-                            e.kind(),
-                            io::ErrorKind::WouldBlock | io::ErrorKind::ConnectionRefused
-                        ) =>
-                    {
-                        break
-                    }
-                    Err(e) => return Err(e),
-                };
+            while let Some((n, from)) = recv_waiting(&self.sockets[bus], &mut self.recv_buf)? {
                 handled += 1;
                 self.serve_packet(bus, n, from)?;
             }
