@@ -2,6 +2,7 @@
 //! that calls the libraries, and (in `report`) the `Display` types of what it prints.
 
 pub(crate) mod bench;
+pub(crate) mod bringup_target;
 pub(crate) mod calibrate;
 pub(crate) mod can;
 pub(crate) mod codesign;
