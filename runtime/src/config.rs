@@ -399,7 +399,28 @@ impl RuntimeConfig {
             path: path.to_path_buf(),
             error,
         })?;
-        Self::from_toml(&text, &path.display().to_string())
+        let origin = path.display().to_string();
+        let config = Self::from_toml(&text, &origin)?;
+        for ignored in config.ignored_settings() {
+            eprintln!("warning: {origin}: {ignored}");
+        }
+        Ok(config)
+    }
+
+    /// The settings this build reads and ignores (kept so that older configs and the logs of
+    /// older runs still load), each with what replaced it; [`RuntimeConfig::load`] prints them
+    /// as warnings.
+    pub fn ignored_settings(&self) -> Vec<String> {
+        let mut ignored = Vec::new();
+        if let Some(factor) = self.safety.max_step_duration_factor {
+            ignored.push(format!(
+                "safety.max_step_duration_factor = {factor} is ignored: the step timeout trips \
+                 a stalled phase after safety.stall_timeout_s = {} s, not a slow step; \
+                 remove it",
+                self.safety.stall_timeout_s
+            ));
+        }
+        ignored
     }
 
     /// Parses and validates TOML; `origin` names the source in errors.
@@ -773,6 +794,27 @@ mod tests {
         let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
         assert_eq!(c.leg_motors.len() + c.held.len(), 14);
         assert_eq!(c.loop_.rate_hz, 1000.0);
+    }
+
+    #[test]
+    fn an_ignored_setting_is_named_with_its_value_and_what_replaced_it() {
+        let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
+        assert!(
+            c.ignored_settings().is_empty(),
+            "{:?}",
+            c.ignored_settings()
+        );
+        let old = shipped().replace("[safety]\n", "[safety]\nmax_step_duration_factor = 3.0\n");
+        let c = RuntimeConfig::from_toml(&old, "old.toml").unwrap();
+        assert_eq!(c.safety.max_step_duration_factor, Some(3.0));
+        let ignored = c.ignored_settings();
+        assert_eq!(ignored.len(), 1, "{ignored:?}");
+        assert!(
+            ignored[0].starts_with("safety.max_step_duration_factor = 3 is ignored")
+                && ignored[0].contains("stall_timeout_s = 1.5 s"),
+            "{}",
+            ignored[0]
+        );
     }
 
     #[test]
