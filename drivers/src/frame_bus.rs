@@ -22,6 +22,40 @@ use std::time::Instant;
 /// How long `activate`, `deactivate` and `Drop` wait for acknowledgements, at least.
 pub const LIFECYCLE_TIMEOUT: Duration = Duration::from_millis(20);
 
+/// An I/O error of bus `bus`'s socket, as a [`BusError`].
+pub fn io_error(bus: usize, e: &std::io::Error) -> BusError {
+    BusError::Io {
+        bus,
+        kind: e.kind(),
+    }
+}
+
+/// Retries a nonblocking send on bus `bus` while the OS answers `WouldBlock` (a full transmit
+/// queue), yielding the CPU between tries: still refused at `deadline` is
+/// [`BusError::DeadlineExceeded`], any other error an I/O error of the bus.
+pub fn send_by<T>(
+    bus: usize,
+    start: Instant,
+    deadline: Instant,
+    mut attempt: impl FnMut() -> std::io::Result<T>,
+) -> Result<T, BusError> {
+    loop {
+        match attempt() {
+            Ok(sent) => return Ok(sent),
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                if Instant::now() >= deadline {
+                    return Err(BusError::DeadlineExceeded {
+                        needed: start.elapsed(),
+                        budget: deadline - start,
+                    });
+                }
+                std::thread::yield_now();
+            }
+            Err(e) => return Err(io_error(bus, &e)),
+        }
+    }
+}
+
 /// What differs between the hardware transports: how frames leave and arrive.
 pub trait FrameTransport {
     /// Number of buses (bus index = position).

@@ -19,7 +19,7 @@
 use crate::a1::{self, Frame, FrameKind};
 use crate::bus::BusError;
 pub use crate::frame_bus::LIFECYCLE_TIMEOUT;
-use crate::frame_bus::{FrameBus, FrameTransport, Replies};
+use crate::frame_bus::{io_error, send_by, FrameBus, FrameTransport, Replies};
 use crate::frame_log::{FrameDirection, FrameLog};
 use socketcan::{
     CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, SocketOptions, StandardId,
@@ -151,13 +151,6 @@ impl FrameBus<CanInterfaces> {
     }
 }
 
-fn io_error(bus: usize, e: &io::Error) -> BusError {
-    BusError::Io {
-        bus,
-        kind: e.kind(),
-    }
-}
-
 impl FrameTransport for CanInterfaces {
     fn bus_count(&self) -> usize {
         self.interfaces.len()
@@ -194,30 +187,14 @@ impl FrameTransport for CanInterfaces {
             let Some(can) = to_can_frame(frame) else {
                 continue;
             };
-            loop {
-                match socket.write_frame(&can) {
-                    Ok(()) => {
-                        log.record(
-                            bus,
-                            FrameDirection::Tx,
-                            start.elapsed(),
-                            frame.id,
-                            &frame.data,
-                        );
-                        break;
-                    }
-                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
-                        if Instant::now() >= deadline {
-                            return Err(BusError::DeadlineExceeded {
-                                needed: start.elapsed(),
-                                budget: deadline - start,
-                            });
-                        }
-                        std::thread::yield_now();
-                    }
-                    Err(e) => return Err(io_error(bus, &e)),
-                }
-            }
+            send_by(bus, start, deadline, || socket.write_frame(&can))?;
+            log.record(
+                bus,
+                FrameDirection::Tx,
+                start.elapsed(),
+                frame.id,
+                &frame.data,
+            );
         }
         Ok(())
     }

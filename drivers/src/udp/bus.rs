@@ -27,7 +27,7 @@ use super::socket::recv_waiting;
 use crate::a1::{self, Frame, FrameKind};
 use crate::bus::BusError;
 pub use crate::frame_bus::LIFECYCLE_TIMEOUT;
-use crate::frame_bus::{FrameBus, FrameTransport, Replies};
+use crate::frame_bus::{io_error, send_by, FrameBus, FrameTransport, Replies};
 use crate::frame_log::{FrameDirection, FrameLog};
 use crate::imu::{Imu, ImuError, ImuSample};
 use core::time::Duration;
@@ -179,13 +179,6 @@ impl FrameBus<UdpLinks> {
     }
 }
 
-fn io_error(bus: usize, e: &io::Error) -> BusError {
-    BusError::Io {
-        bus,
-        kind: e.kind(),
-    }
-}
-
 impl FrameTransport for UdpLinks {
     fn bus_count(&self) -> usize {
         self.links.len()
@@ -241,24 +234,11 @@ impl FrameTransport for UdpLinks {
         }
         let len = writer.finish();
         link.seq = link.seq.wrapping_add(1);
-        loop {
-            match link.socket.send_to(&self.send_buf[..len], link.peer) {
-                Ok(_) => {
-                    self.stats.packets_sent += 1;
-                    return Ok(());
-                }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
-                    if Instant::now() >= deadline {
-                        return Err(BusError::DeadlineExceeded {
-                            needed: start.elapsed(),
-                            budget: deadline - start,
-                        });
-                    }
-                    std::thread::yield_now();
-                }
-                Err(e) => return Err(io_error(bus, &e)),
-            }
-        }
+        send_by(bus, start, deadline, || {
+            link.socket.send_to(&self.send_buf[..len], link.peer)
+        })?;
+        self.stats.packets_sent += 1;
+        Ok(())
     }
 
     /// One datagram: its reply frames offered, its IMU frames assembled, the rest counted.
