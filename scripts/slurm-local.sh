@@ -69,9 +69,10 @@ if ! munge -n </dev/null >/dev/null 2>&1; then
     [ -s /etc/munge/munge.key ] || mungekey --create --keyfile=/etc/munge/munge.key
     install -d -o munge -g munge -m 0755 /run/munge
     chown munge:munge /etc/munge/munge.key
-    runuser -u munge -- /usr/sbin/munged --pid-file="$work/munged.pid" 2>/dev/null \
-        || { chmod 777 "$work"; runuser -u munge -- /usr/sbin/munged --pid-file="$work/munged.pid"; }
-    started+=("$work/munged.pid")
+    # Its pid file in a folder it may write (munged runs as the munge user).
+    install -d -o munge -g munge -m 0755 "$work/munge"
+    runuser -u munge -- /usr/sbin/munged --pid-file="$work/munge/munged.pid"
+    started+=("$work/munge/munged.pid")
     for _ in $(seq 50); do munge -n </dev/null >/dev/null 2>&1 && break; sleep 0.1; done
     munge -n </dev/null | unmunge >/dev/null
 fi
@@ -110,7 +111,6 @@ SlurmdTimeout=30
 NodeName=$node NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$mem_mb State=UNKNOWN
 PartitionName=local Nodes=$node Default=YES MaxTime=INFINITE State=UP
 EOF
-: >"$work/cgroup.conf"
 export SLURM_CONF=$work/slurm.conf
 slurmctld -f "$SLURM_CONF"
 started+=("$work/slurmctld.pid")
