@@ -142,6 +142,7 @@ fn write_plan(args: &PlanArgs) -> Result<()> {
         tool: plan::tool_version(),
         study: args.study,
         out_dir,
+        task_count: 0,
         resources: Resources {
             time_per_task_min: args.time_per_task_min,
             mem_per_task_mb: args.mem_per_task_mb,
@@ -181,6 +182,7 @@ fn write_plan(args: &PlanArgs) -> Result<()> {
         }
         Study::Library => bail!(LIBRARY_NOT_YET),
     }
+    plan.task_count = plan.tasks.len();
     plan.validate(&args.out)?;
     std::fs::write(&args.out, plan.to_toml()?)
         .with_context(|| format!("writing {}", args.out.display()))?;

@@ -6,6 +6,7 @@
 //! tool = "adam 0.1.0"
 //! study = "codesign"
 //! out_dir = "/home/me/out/sweep-codesign"
+//! task_count = 4
 //!
 //! [resources]
 //! time_per_task_min = 30
@@ -182,6 +183,8 @@ pub(crate) struct SweepPlan {
     pub(crate) study: Study,
     /// Where results (`results/task-NNNNN.json`), task logs and the report go (absolute).
     pub(crate) out_dir: PathBuf,
+    /// How many tasks the plan lists (a plan cut off between two tasks is refused).
+    pub(crate) task_count: usize,
     /// Per task, for the cluster.
     pub(crate) resources: Resources,
     /// The input files by content hash.
@@ -231,6 +234,13 @@ impl SweepPlan {
         }
         if self.tasks.is_empty() {
             bail!("{file}: field 'tasks': the plan has no task");
+        }
+        if self.tasks.len() != self.task_count {
+            bail!(
+                "{file}: field 'task_count' = {}, but the file lists {} tasks (cut off?)",
+                self.task_count,
+                self.tasks.len()
+            );
         }
         let r = &self.resources;
         for (field, v) in [
@@ -346,6 +356,7 @@ mod tests {
             tool: tool_version(),
             study: Study::Codesign,
             out_dir: PathBuf::from("/tmp/sweep"),
+            task_count: 4,
             resources: Resources {
                 time_per_task_min: 30,
                 mem_per_task_mb: 2048,
@@ -416,6 +427,46 @@ mod tests {
             e.contains("index 4 is out of range") && e.contains("4 tasks"),
             "{e}"
         );
+    }
+
+    proptest::proptest! {
+        /// Any plan of positive lengths and any index count survives TOML bit for bit.
+        #[test]
+        fn any_plan_round_trips(
+            lengths in proptest::collection::vec((1e-6f64..10.0, 1e-6f64..10.0), 1..40),
+            limit in 1u32..1000,
+        ) {
+            let mut p = plan();
+            p.resources.array_limit = limit;
+            p.task_count = lengths.len();
+            p.tasks = lengths
+                .iter()
+                .enumerate()
+                .map(|(index, &(a, b))| Task {
+                    index,
+                    initial_m: Some([a, b]),
+                    lengths_m: None,
+                    treadmill: None,
+                })
+                .collect();
+            let back = SweepPlan::parse(&p.to_toml().unwrap(), Path::new("p.toml")).unwrap();
+            proptest::prop_assert_eq!(back, p);
+        }
+
+        /// A plan cut off anywhere (a half-copied file) is refused naming the file (cut between
+        /// two tasks: by its task count), never a panic; only the whole text reads back.
+        #[test]
+        fn a_cut_off_plan_is_refused(cut in 0usize..2000) {
+            let text = plan().to_toml().unwrap();
+            let cut = cut.min(text.len());
+            match SweepPlan::parse(&text[..cut], Path::new("p.toml")) {
+                Err(e) => proptest::prop_assert!(e.to_string().starts_with("p.toml"), "{}", e),
+                Ok(p) => {
+                    proptest::prop_assert_eq!(p, plan());
+                    proptest::prop_assert!(text[cut..].trim().is_empty(), "read {} of {}", cut, text.len());
+                }
+            }
+        }
     }
 
     #[test]
