@@ -3,9 +3,10 @@
 //!
 //! This file parses and dispatches; each group of commands lives in its own module under
 //! [`cli`]: `run` (run, demo, soak), `plan` (plan, gait check), `codesign`, `bench`, `logs`
-//! (logs, replay, plot), `op`, `model` (model, generate-urdf) and `emulate` (emulated
-//! hardware). What a command prints at length comes from `Display` types in the group's
-//! `report` module; `cli::plots` draws the figures and `cli::paths` derives file paths.
+//! (logs, replay, plot), `op`, `model` (model, generate-urdf), `emulate` (emulated
+//! hardware) and `sweep` (a study as the tasks of a cluster's job array). What a command
+//! prints at length comes from `Display` types in the group's `report` module; `cli::plots`
+//! draws the figures and `cli::paths` derives file paths.
 //!
 //! **From any folder.** The shipped robots, gaits and configs are found from any working
 //! directory (`cli::shipped`): a relative `configs/…` input missing from the working directory
@@ -21,7 +22,7 @@ use cli::bench::BenchWhat;
 use cli::codesign::CodesignStudy;
 use cli::logs::{LogsCommand, PlotWhat};
 use cli::plan::GaitCommand;
-use cli::{bench, calibrate, can, codesign, emulate, logs, model, op, plan, run};
+use cli::{bench, calibrate, can, codesign, emulate, logs, model, op, plan, run, sweep};
 
 mod cli;
 
@@ -108,6 +109,13 @@ enum Command {
     Can {
         #[command(subcommand)]
         command: can::CanCommand,
+    },
+    /// A study as independent tasks for a cluster (SLURM job arrays): `adam sweep plan
+    /// --study codesign|landscape|treadmill`, `adam sweep slurm --plan P [--submit]`, `adam
+    /// sweep task --plan P [--index I]`, `adam sweep collect --plan P`.
+    Sweep {
+        #[command(subcommand)]
+        command: sweep::SweepCommand,
     },
 }
 
@@ -217,5 +225,6 @@ fn dispatch(cli: Cli) -> Result<()> {
             }
         },
         Command::GenerateUrdf(args) => model::write_urdf(args),
+        Command::Sweep { command } => sweep::sweep(command),
     }
 }

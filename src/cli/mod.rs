@@ -15,3 +15,4 @@ pub(crate) mod plan;
 pub(crate) mod plots;
 pub(crate) mod run;
 pub(crate) mod shipped;
+pub(crate) mod sweep;

@@ -90,7 +90,8 @@ pub fn push_at_phase(force_x_n: f64, phase: f64, seed: u64) -> SimWalkOptions {
 }
 
 /// The start and restart cases.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Restart {
     /// From Stand (belt at rest while the controller ramps), the belt ramps to 0.25 m/s at
     /// 2 s, Walk at 3 s; 20 s.

@@ -6,7 +6,7 @@ mod library;
 mod report;
 mod treadmill;
 
-pub(crate) use treadmill::treadmill;
+pub(crate) use treadmill::{matrix_runs, tables as treadmill_tables, treadmill};
 
 pub(crate) use library::library;
 
