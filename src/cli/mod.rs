@@ -7,6 +7,7 @@ pub(crate) mod calibrate;
 pub(crate) mod can;
 pub(crate) mod codesign;
 pub(crate) mod emulate;
+pub(crate) mod live;
 pub(crate) mod logs;
 pub(crate) mod model;
 pub(crate) mod op;

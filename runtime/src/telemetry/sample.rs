@@ -71,6 +71,10 @@ pub struct StateSample {
     pub imu_accel_x_mps2: f64,
     /// Raw accelerometer z, m/s².
     pub imu_accel_z_mps2: f64,
+    /// The simulator's true torso pitch, rad (NaN on hardware): the live view's second tree.
+    pub true_pitch_rad: f64,
+    /// The simulator's true position on the belt, + forward of its centre, m (NaN on hardware).
+    pub true_belt_position_m: f64,
 }
 
 impl Default for StateSample {
@@ -105,6 +109,8 @@ impl Default for StateSample {
             imu_gyro_rad_s: 0.0,
             imu_accel_x_mps2: 0.0,
             imu_accel_z_mps2: 0.0,
+            true_pitch_rad: f64::NAN,
+            true_belt_position_m: f64::NAN,
         }
     }
 }
@@ -199,6 +205,11 @@ pub fn iceoryx2_node() -> std::result::Result<
     iceoryx2::prelude::NodeBuilder::new().create::<iceoryx2::prelude::ipc::Service>()
 }
 
+/// Samples a subscriber of the state service may hold before the oldest is overwritten (the
+/// publisher never waits): 0.5 s at 1 kHz. Publisher and subscribers ask for the same, so
+/// whichever starts first creates a service the other can open.
+pub const SUBSCRIBER_BUFFER: usize = 512;
+
 /// Publishes a [`StateSample`] every tick over iceoryx2 (zero-copy shared memory).
 ///
 /// iceoryx2 ports are not `Send`: create the publisher on the thread that uses it (the loop
@@ -233,6 +244,7 @@ impl Publisher {
         let service = node
             .service_builder(&service_name)
             .publish_subscribe::<StateSample>()
+            .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
             .open_or_create()
             .map_err(|e| err(format!("cannot open the service: {e}")))?;
         let publisher = service
@@ -298,6 +310,8 @@ mod tests {
             t_s: 0.042,
             state: ControlState::Walk as u32,
             phase: 0.37,
+            true_pitch_rad: 0.01,
+            true_belt_position_m: -0.1,
             ..StateSample::default()
         };
         sample.q_rad[3] = 1.25;
