@@ -37,9 +37,9 @@
 //!    the torso 13 cm behind the new stance foot, too slow to pass over it: the phase stalls
 //!    and the step timeout trips (1.5 s).
 //!
-//! Tried and not enough (3 seeds each): a braking step of 0.20 or 0.22 m (1 of 3 restarts); a
-//! launch that waits until the robot is at rest (from rest on the 0.30 m stance the same chain
-//! follows). What the trace points at: a Stop that ends on the gait's own stance width, or a
+//! Tried and not enough (seeds 1–3): a launch that waits until the robot is at rest (from rest
+//! on the 0.30 m stance the same chain follows: 0 of 3 restarts), and with it a braking step of
+//! 0.20 or 0.22 m (1 of 3 each). What the trace points at: a Stop that ends on the gait's own stance width, or a
 //! first step after a wide stance that keeps the crouch and takes the rear foot only as far as
 //! a normal step (an initiation step, the braking step reversed).
 
