@@ -43,6 +43,24 @@ fn s(p: &Path) -> String {
 
 /// A task of `plan` as a job array's element: `adam sweep task --plan P` with
 /// `SLURM_ARRAY_TASK_ID` set, no `--index`.
+/// `adam sweep plan --study <study> --out-dir <out_dir> --out <plan>` with `args`: whether it
+/// succeeded, its stdout and stderr.
+fn sweep_plan(study: &str, out_dir: &str, plan: &Path, args: &[&str]) -> (bool, String, String) {
+    let plan = s(plan);
+    let mut all = vec![
+        "sweep",
+        "plan",
+        "--study",
+        study,
+        "--out-dir",
+        out_dir,
+        "--out",
+        &plan,
+    ];
+    all.extend_from_slice(args);
+    run(&all)
+}
+
 fn array_task(plan: &Path, index: usize) -> Child {
     adam()
         .args(["sweep", "task", "--plan", &s(plan)])
@@ -72,18 +90,7 @@ fn a_codesign_plan_run_task_by_task_with_one_killed_collects_to_the_in_process_r
     let (inproc, array, plan) = (dir.join("inproc"), dir.join("array"), dir.join("plan.toml"));
     let (ok, _, err) = run(&["codesign", "sweep", "--grid", "2", "--out-dir", &s(&inproc)]);
     assert!(ok, "{err}");
-    let (ok, out, err) = run(&[
-        "sweep",
-        "plan",
-        "--study",
-        "codesign",
-        "--grid",
-        "2",
-        "--out-dir",
-        &s(&array),
-        "--out",
-        &s(&plan),
-    ]);
+    let (ok, out, err) = sweep_plan("codesign", &s(&array), &plan, &["--grid", "2"]);
     assert!(ok && out.contains("4 tasks (0..=3)"), "{out}{err}");
 
     // Task 2 is killed while it runs: it leaves no result.
@@ -163,20 +170,12 @@ fn changed_inputs_bad_indices_other_versions_and_corrupt_results_are_named() {
     )
     .expect("copy the config");
     let plan = dir.join("plan.toml");
-    let (ok, _, err) = run(&[
-        "sweep",
-        "plan",
-        "--study",
+    let (ok, _, err) = sweep_plan(
         "codesign",
-        "--grid",
-        "2",
-        "--config",
-        &s(&config),
-        "--out-dir",
         &s(&dir.join("out")),
-        "--out",
-        &s(&plan),
-    ]);
+        &plan,
+        &["--grid", "2", "--config", &s(&config)],
+    );
     assert!(ok, "{err}");
     let plan_text = std::fs::read_to_string(&plan).expect("plan");
 
@@ -267,24 +266,21 @@ fn changed_inputs_bad_indices_other_versions_and_corrupt_results_are_named() {
 fn the_sbatch_scripts_pass_bash_n_name_every_task_and_are_not_submitted_without_sbatch() {
     let dir = scratch("slurm");
     let plan = dir.join("plan.toml");
-    let (ok, _, err) = run(&[
-        "sweep",
-        "plan",
-        "--study",
+    let (ok, _, err) = sweep_plan(
         "codesign",
-        "--grid",
-        "3",
-        "--out-dir",
         &s(&dir.join("out")),
-        "--out",
-        &s(&plan),
-        "--time-per-task-min",
-        "90",
-        "--mem-per-task-mb",
-        "1500",
-        "--array-limit",
-        "4",
-    ]);
+        &plan,
+        &[
+            "--grid",
+            "3",
+            "--time-per-task-min",
+            "90",
+            "--mem-per-task-mb",
+            "1500",
+            "--array-limit",
+            "4",
+        ],
+    );
     assert!(ok, "{err}");
     let (ok, out, err) = run(&["sweep", "slurm", "--plan", &s(&plan)]);
     assert!(ok && out.contains("9 tasks, --array=0-8%4"), "{out}{err}");
@@ -370,18 +366,7 @@ fn a_landscape_plan_collects_to_the_grid_of_the_in_process_landscape() {
     assert!(ok, "{err}");
     let plan = dir.join("plan.toml");
     let array = dir.join("array");
-    let (ok, _, err) = run(&[
-        "sweep",
-        "plan",
-        "--study",
-        "landscape",
-        "--grid",
-        "2",
-        "--out-dir",
-        &s(&array),
-        "--out",
-        &s(&plan),
-    ]);
+    let (ok, _, err) = sweep_plan("landscape", &s(&array), &plan, &["--grid", "2"]);
     assert!(ok, "{err}");
     every_task(&plan, 4);
     let (ok, out, err) = run(&["sweep", "collect", "--plan", &s(&plan)]);
@@ -404,19 +389,7 @@ fn a_treadmill_plan_collects_to_the_tables_of_the_bench() {
     let dir = scratch("treadmill");
     let plan = dir.join("plan.toml");
     let array = dir.join("array");
-    let (ok, out, err) = run(&[
-        "sweep",
-        "plan",
-        "--study",
-        "treadmill",
-        "--quick",
-        "--seeds",
-        "1",
-        "--out-dir",
-        &s(&array),
-        "--out",
-        &s(&plan),
-    ]);
+    let (ok, out, err) = sweep_plan("treadmill", &s(&array), &plan, &["--quick", "--seeds", "1"]);
     // 5 belt speeds, 1 belt step, 2 forces × 3 points, 3 restarts: 15 runs of seed 1.
     assert!(ok && out.contains("15 tasks (0..=14)"), "{out}{err}");
     every_task(&plan, 15);

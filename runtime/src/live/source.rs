@@ -3,7 +3,9 @@
 //! by more than [`SUBSCRIBER_BUFFER`] samples, the oldest are overwritten (counted here as gaps
 //! in the tick counter).
 
-use crate::telemetry::sample::{iceoryx2_node, StateSample, SUBSCRIBER_BUFFER};
+use crate::telemetry::sample::{
+    open_state_service, telemetry_error, StateSample, StateService, SUBSCRIBER_BUFFER,
+};
 use crate::{Result, RuntimeError};
 use iceoryx2::prelude::*;
 
@@ -11,11 +13,7 @@ use iceoryx2::prelude::*;
 pub struct SampleSource {
     // Field order = drop order: the port before its service before its node.
     subscriber: iceoryx2::port::subscriber::Subscriber<ipc::Service, StateSample, ()>,
-    _service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
-        ipc::Service,
-        StateSample,
-        (),
-    >,
+    _service: StateService,
     _node: iceoryx2::node::Node<ipc::Service>,
     last_tick: Option<u64>,
     missed: u64,
@@ -24,25 +22,12 @@ pub struct SampleSource {
 impl SampleSource {
     /// Opens (or creates, if the loop has not started yet) the service `name`.
     pub fn open(name: &str) -> Result<Self> {
-        let err = |message: String| RuntimeError::Telemetry {
-            service: name.to_string(),
-            message,
-        };
-        let node = iceoryx2_node().map_err(|e| err(format!("cannot create a node: {e}")))?;
-        let service_name: ServiceName = name
-            .try_into()
-            .map_err(|e| err(format!("not a valid service name: {e}")))?;
-        let service = node
-            .service_builder(&service_name)
-            .publish_subscribe::<StateSample>()
-            .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
-            .open_or_create()
-            .map_err(|e| err(format!("cannot open the service: {e}")))?;
+        let (node, service) = open_state_service(name)?;
         let subscriber = service
             .subscriber_builder()
             .buffer_size(SUBSCRIBER_BUFFER)
             .create()
-            .map_err(|e| err(format!("cannot create a subscriber: {e}")))?;
+            .map_err(|e| telemetry_error(name, format!("cannot create a subscriber: {e}")))?;
         Ok(Self {
             subscriber,
             _service: service,

@@ -8,7 +8,7 @@ mod live;
 mod report;
 mod treadmill;
 
-pub(crate) use treadmill::{matrix_runs, tables as treadmill_tables, treadmill};
+pub(crate) use treadmill::{matrix_runs, seeds_or_default, tables as treadmill_tables, treadmill};
 
 pub(crate) use library::library;
 pub(crate) use live::live;

@@ -310,15 +310,8 @@ fn bisections(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes) -> Result<Str
     Ok(out)
 }
 
-/// `adam bench treadmill`: every scenario over `seeds`, printing each table as it is done,
-/// then the wall time, the CPU time and the simulated time.
-pub(crate) fn treadmill(
-    seeds: Option<Vec<u64>>,
-    quick: bool,
-    config: &std::path::Path,
-    gait: &std::path::Path,
-) -> Result<()> {
-    let sizes = if quick { QUICK } else { FULL };
+/// The seeds of a treadmill matrix: those given (at least one), else 1–2 (`--quick`) or 1–5.
+pub(crate) fn seeds_or_default(seeds: Option<Vec<u64>>, quick: bool) -> Result<Vec<u64>> {
     let seeds = seeds.unwrap_or_else(|| {
         if quick {
             vec![1, 2]
@@ -329,6 +322,19 @@ pub(crate) fn treadmill(
     if seeds.is_empty() {
         bail!("--seeds must name at least one seed");
     }
+    Ok(seeds)
+}
+
+/// `adam bench treadmill`: every scenario over `seeds`, printing each table as it is done,
+/// then the wall time, the CPU time and the simulated time.
+pub(crate) fn treadmill(
+    seeds: Option<Vec<u64>>,
+    quick: bool,
+    config: &std::path::Path,
+    gait: &std::path::Path,
+) -> Result<()> {
+    let sizes = if quick { QUICK } else { FULL };
+    let seeds = seeds_or_default(seeds, quick)?;
     let (config, gait) = (
         crate::cli::shipped::input(config),
         crate::cli::shipped::input(gait),

@@ -5,8 +5,8 @@
 
 use super::plan::{Input, SweepPlan, Task, TreadmillSettings};
 use super::result::{Payload, TaskResult};
-use crate::cli::bench::{matrix_runs, treadmill_tables};
-use anyhow::{bail, Context, Result};
+use crate::cli::bench::{matrix_runs, seeds_or_default, treadmill_tables};
+use anyhow::{Context, Result};
 use std::path::Path;
 
 /// The roles of the treadmill study's inputs.
@@ -21,16 +21,7 @@ pub(crate) fn plan(
     seeds: Option<Vec<u64>>,
     quick: bool,
 ) -> Result<(Vec<Input>, TreadmillSettings, Vec<Task>)> {
-    let seeds = seeds.unwrap_or_else(|| {
-        if quick {
-            vec![1, 2]
-        } else {
-            vec![1, 2, 3, 4, 5]
-        }
-    });
-    if seeds.is_empty() {
-        bail!("--seeds must name at least one seed");
-    }
+    let seeds = seeds_or_default(seeds, quick)?;
     // Loaded once here: a bad config or gait is refused before any task runs.
     runtime::Setup::load(config, gait)?;
     let g = model::gait::GaitFile::load(gait)?;
