@@ -3,8 +3,9 @@
 //! [`crate::udp`]).
 //!
 //! What every transport shares lives here once: the lifecycle (configure → activate →
-//! exchange → deactivate, `Drop` = disable), the enable round that leaves nothing half enabled
-//! (and keeps both rounds in the frame log), and the round trip: drain what is stale, send each
+//! exchange → deactivate, `Drop` = disable; its steps, with the enable round that leaves
+//! nothing half enabled, are shared with the simulated bus in `crate::lifecycle`), and the
+//! round trip: drain what is stale, send each
 //! bus's command frames, then poll every bus until each commanded motor has replied or the
 //! timeout (measured from the call with the monotonic clock) runs out, busy-polling and
 //! yielding the CPU between empty polls. A reply is used once, for the motor that was asked on
@@ -13,9 +14,10 @@
 
 use crate::a1::{self, Frame, Special};
 use crate::bus::{
-    BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation, MAX_MOTORS,
+    BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, MAX_MOTORS,
 };
 use crate::frame_log::{FrameDirection, FrameLog, LoggedFrame};
+use crate::lifecycle::{self, LifecycleParts, SpecialRounds};
 use core::time::Duration;
 use std::time::Instant;
 
@@ -241,9 +243,21 @@ impl<T: FrameTransport> FrameBus<T> {
         replies.missing()?;
         Ok(start.elapsed())
     }
+}
 
-    /// One special frame (enable, disable) to every configured motor; an enable a motor
-    /// refuses is [`BusError::EnableRefused`].
+impl<T: FrameTransport> SpecialRounds for FrameBus<T> {
+    fn parts(&mut self) -> LifecycleParts<'_> {
+        LifecycleParts {
+            state: &mut self.state,
+            table: &mut self.table,
+            frames: &mut self.frames,
+        }
+    }
+
+    fn buses(&self) -> usize {
+        self.transport.bus_count()
+    }
+
     fn special_to_all(&mut self, special: Special) -> Result<(), BusError> {
         let mut frames = [Frame {
             id: 0,
@@ -282,24 +296,11 @@ impl<T: FrameTransport> MotorBus for FrameBus<T> {
     }
 
     fn configure(&mut self, motors: &[MotorSpec]) -> Result<(), BusError> {
-        self.state.allows(Operation::Configure)?;
-        self.table = MotorTable::new(motors, self.transport.bus_count())?;
-        self.state = Lifecycle::Configured;
-        Ok(())
+        lifecycle::configure(self, motors)
     }
 
     fn activate(&mut self) -> Result<(), BusError> {
-        self.state.allows(Operation::Activate)?;
-        if let Err(e) = self.special_to_all(Special::Enable) {
-            // Leave nothing half enabled; the frame log keeps both rounds.
-            let enable_frames = self.frames;
-            let _ = self.special_to_all(Special::Disable);
-            let disable_frames = core::mem::replace(&mut self.frames, enable_frames);
-            self.frames.append(&disable_frames);
-            return Err(e);
-        }
-        self.state = Lifecycle::Active;
-        Ok(())
+        lifecycle::activate(self)
     }
 
     fn exchange(
@@ -324,9 +325,7 @@ impl<T: FrameTransport> MotorBus for FrameBus<T> {
     }
 
     fn deactivate(&mut self) -> Result<(), BusError> {
-        self.state.allows(Operation::Deactivate)?;
-        self.state = Lifecycle::Configured;
-        self.special_to_all(Special::Disable)
+        lifecycle::deactivate(self)
     }
 
     fn frames(&self) -> &[LoggedFrame] {
@@ -336,8 +335,6 @@ impl<T: FrameTransport> MotorBus for FrameBus<T> {
 
 impl<T: FrameTransport> Drop for FrameBus<T> {
     fn drop(&mut self) {
-        if self.state == Lifecycle::Active {
-            let _ = self.special_to_all(Special::Disable);
-        }
+        lifecycle::disable_if_active(self);
     }
 }

@@ -85,6 +85,7 @@ pub mod conformance;
 pub mod frame_bus;
 pub mod frame_log;
 pub mod imu;
+mod lifecycle;
 mod noise;
 pub mod sim;
 pub mod socketcan_bus;

@@ -32,9 +32,10 @@
 //!   carries on from there). [`SimBus::wire_stats`] counts what the wire did.
 
 use crate::a1::{self, Command, ErrorFlags, Frame, MotorId, Reply, Special};
-use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation};
+use crate::bus::{BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable};
 use crate::frame_log::{FrameDirection, FrameLog, LoggedFrame};
 use crate::imu::{Imu, ImuError, ImuSample};
+use crate::lifecycle::{self, LifecycleParts, SpecialRounds};
 use crate::sim::firmware::{A1Model, EncoderMount, Firmware, SimMotor, TickPeriod};
 use crate::sim::plant::JointPlant;
 use crate::sim::wire::{
@@ -428,7 +429,39 @@ impl<P: JointPlant> SimBus<P> {
         }
     }
 
-    /// Send a special frame to every configured motor; the first silent one, if any.
+    /// Advance motors and plant by one control period, then latch received commands.
+    fn advance(&mut self) {
+        let period = TickPeriod::new(&self.config.model);
+        for _ in 0..self.substeps {
+            self.torques_nm.fill(0.0);
+            for f in &mut self.firmware {
+                let j = f.motor.joint;
+                let q = self.plant.position_rad(j);
+                let dq = self.plant.velocity_rad_s(j);
+                self.torques_nm[j] = f.tick(q, dq, &period, &self.config.model, &mut self.rng);
+            }
+            self.plant.step(&self.torques_nm, period.dt_s);
+        }
+        for f in &mut self.firmware {
+            f.latch();
+        }
+        self.ticks += 1;
+    }
+}
+
+impl<P: JointPlant> SpecialRounds for SimBus<P> {
+    fn parts(&mut self) -> LifecycleParts<'_> {
+        LifecycleParts {
+            state: &mut self.state,
+            table: &mut self.table,
+            frames: &mut self.frames,
+        }
+    }
+
+    fn buses(&self) -> usize {
+        self.config.bus_count
+    }
+
     fn special_to_all(&mut self, special: Special) -> Result<(), BusError> {
         self.frames.clear();
         let mut first_error = None;
@@ -454,25 +487,6 @@ impl<P: JointPlant> SimBus<P> {
         }
         first_error.map_or(Ok(()), Err)
     }
-
-    /// Advance motors and plant by one control period, then latch received commands.
-    fn advance(&mut self) {
-        let period = TickPeriod::new(&self.config.model);
-        for _ in 0..self.substeps {
-            self.torques_nm.fill(0.0);
-            for f in &mut self.firmware {
-                let j = f.motor.joint;
-                let q = self.plant.position_rad(j);
-                let dq = self.plant.velocity_rad_s(j);
-                self.torques_nm[j] = f.tick(q, dq, &period, &self.config.model, &mut self.rng);
-            }
-            self.plant.step(&self.torques_nm, period.dt_s);
-        }
-        for f in &mut self.firmware {
-            f.latch();
-        }
-        self.ticks += 1;
-    }
 }
 
 impl<P: JointPlant> MotorBus for SimBus<P> {
@@ -485,24 +499,11 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
     }
 
     fn configure(&mut self, motors: &[MotorSpec]) -> Result<(), BusError> {
-        self.state.allows(Operation::Configure)?;
-        self.table = MotorTable::new(motors, self.config.bus_count)?;
-        self.state = Lifecycle::Configured;
-        Ok(())
+        lifecycle::configure(self, motors)
     }
 
     fn activate(&mut self) -> Result<(), BusError> {
-        self.state.allows(Operation::Activate)?;
-        if let Err(e) = self.special_to_all(Special::Enable) {
-            // Leave nothing half enabled; the frame log keeps both rounds.
-            let enable_frames = self.frames;
-            let _ = self.special_to_all(Special::Disable);
-            let disable_frames = core::mem::replace(&mut self.frames, enable_frames);
-            self.frames.append(&disable_frames);
-            return Err(e);
-        }
-        self.state = Lifecycle::Active;
-        Ok(())
+        lifecycle::activate(self)
     }
 
     fn exchange(
@@ -548,9 +549,7 @@ impl<P: JointPlant> MotorBus for SimBus<P> {
     }
 
     fn deactivate(&mut self) -> Result<(), BusError> {
-        self.state.allows(Operation::Deactivate)?;
-        self.state = Lifecycle::Configured;
-        self.special_to_all(Special::Disable)
+        lifecycle::deactivate(self)
     }
 
     fn frames(&self) -> &[LoggedFrame] {
@@ -570,9 +569,7 @@ impl<P: JointPlant + Imu> Imu for SimBus<P> {
 
 impl<P: JointPlant> Drop for SimBus<P> {
     fn drop(&mut self) {
-        if self.state == Lifecycle::Active {
-            let _ = self.special_to_all(Special::Disable);
-        }
+        lifecycle::disable_if_active(self);
     }
 }
 
