@@ -598,6 +598,12 @@ fn the_layout_names_only_topics_and_fields_of_a_log_and_of_the_live_server() {
         }
     }
     collect(&layout, &mut paths);
+    // The topics the 3D panel shows (the URDF, the scene) are keys of its `topics`.
+    let panel_topics = layout["configById"]["3D!robot"]["topics"]
+        .as_object()
+        .expect("the 3D panel's topics");
+    paths.extend(panel_topics.keys().cloned());
+    assert!(paths.contains(&"/robot_description".to_string()));
     assert!(paths.len() >= 15, "{paths:?}");
     for path in &paths {
         let (topic, fields) = path.split_once('.').unwrap_or((path, ""));
@@ -619,5 +625,36 @@ fn the_layout_names_only_topics_and_fields_of_a_log_and_of_the_live_server() {
         }
         assert!(v.is_number() || v.is_string(), "{path}: {v} in {last}");
     }
+    std::fs::remove_file(&log).ok();
+}
+
+/// Foxglove's indexed MCAP reader refuses a file with a chunk that has no message index
+/// ("Chunks without message indexes are not currently supported"): the writer once closed a
+/// chunk of schemas and channels alone (by writing its attachments after them), and Foxglove
+/// opened no demo log. Every chunk of a log now holds messages and has their index.
+#[test]
+fn every_chunk_of_a_log_has_a_message_index_as_foxglove_requires() {
+    let setup = runtime::Setup::shipped().expect("setup");
+    let log = temp_log("chunks");
+    let mut options = runtime::sim::run::SimWalkOptions::new(2.0);
+    options.log_path = Some(log.clone());
+    runtime::sim::run::walk(&setup, &options).expect("walk");
+    let bytes = std::fs::read(&log).expect("log");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("summary")
+        .expect("summary");
+    assert!(
+        summary.chunk_indexes.len() >= 2,
+        "{} chunks",
+        summary.chunk_indexes.len()
+    );
+    for (i, c) in summary.chunk_indexes.iter().enumerate() {
+        assert!(
+            c.message_index_length > 0 && !c.message_index_offsets.is_empty(),
+            "chunk {i} at {} has no message index",
+            c.chunk_start_offset
+        );
+    }
+    assert_eq!(summary.attachment_indexes.len(), 3, "gait, config, URDF");
     std::fs::remove_file(&log).ok();
 }
