@@ -598,6 +598,12 @@ fn the_layout_names_only_topics_and_fields_of_a_log_and_of_the_live_server() {
         }
     }
     collect(&layout, &mut paths);
+    // The topics the 3D panel shows (the URDF, the scene) are keys of its `topics`.
+    let panel_topics = layout["configById"]["3D!robot"]["topics"]
+        .as_object()
+        .expect("the 3D panel's topics");
+    paths.extend(panel_topics.keys().cloned());
+    assert!(paths.contains(&"/robot_description".to_string()));
     assert!(paths.len() >= 15, "{paths:?}");
     for path in &paths {
         let (topic, fields) = path.split_once('.').unwrap_or((path, ""));
@@ -619,5 +625,191 @@ fn the_layout_names_only_topics_and_fields_of_a_log_and_of_the_live_server() {
         }
         assert!(v.is_number() || v.is_string(), "{path}: {v} in {last}");
     }
+    std::fs::remove_file(&log).ok();
+}
+
+fn adam() -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_adam"));
+    c.current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
+/// `adam run --backend udp --live` against `adam emulate motors` in another process: the same
+/// loop publishes its samples, `adam live` (its child) serves them, and every `/joints` and
+/// `/estimator` message a client decodes is the log's at the same time; the robot's tree is in
+/// `/tf` and, with no ground truth over UDP, no `truth/` tree.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn live_view_of_a_udp_run_matches_its_log() {
+    let dir = std::env::temp_dir().join(unique("udp").replace('/', "-"));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    // The shipped config on a service of this test's own (runs in parallel must not meet).
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let shipped = std::fs::read_to_string(root.join("configs/runtime/adam.toml")).expect("config");
+    let service = unique("udp-run");
+    let text = shipped.replace(
+        "service_name = \"adam/runtime/state\"",
+        &format!("service_name = \"{service}\""),
+    );
+    assert_ne!(text, shipped, "the shipped config names its service");
+    let config = dir.join("adam.toml");
+    std::fs::write(&config, text).expect("write config");
+    let log = dir.join("udp.mcap");
+
+    let mut emulator = adam()
+        .args([
+            "emulate",
+            "motors",
+            "--listen",
+            "127.0.0.1:0",
+            "--idle-exit",
+            "60",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("emulator");
+    let mut emulator_out = std::io::BufReader::new(emulator.stdout.take().expect("stdout"));
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut emulator_out, &mut first).expect("emulator's first line");
+    let motors = first
+        .split(" from ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .unwrap_or_else(|| panic!("no address in `{first}`"))
+        .to_string();
+    let addr = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .expect("a free port");
+    let run = adam()
+        .args([
+            "run",
+            "--backend",
+            "udp",
+            "--motors",
+            &motors,
+            "--duration",
+            "20s",
+        ])
+        .arg("--live")
+        .arg(addr.to_string())
+        .args(["--live-decimate", "/joints=5,/estimator=5,/tf=50"])
+        .arg("--config")
+        .arg(&config)
+        .arg("--log")
+        .arg(&log)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run");
+    let run = tokio::task::spawn_blocking(move || run.wait_with_output());
+
+    // The run starts once `adam live` serves; connect as soon as it listens.
+    let mut attempt = 0;
+    let mut ws = loop {
+        match connect_with(addr, Some(SUBPROTOCOL)).await {
+            Ok(ws) => break ws,
+            Err(e) => {
+                attempt += 1;
+                assert!(attempt < 600, "adam live never listened on {addr}: {e}");
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+        }
+    };
+    assert_eq!(next_json(&mut ws).await["op"], "serverInfo");
+    let adv = next_json(&mut ws).await;
+    let ids: HashMap<String, u32> = adv["channels"]
+        .as_array()
+        .expect("channels")
+        .iter()
+        .map(|c| {
+            let topic = c["topic"].as_str().expect("topic").to_string();
+            (topic, c["id"].as_u64().expect("id") as u32)
+        })
+        .collect();
+    subscribe(
+        &mut ws,
+        &[(1, ids["/joints"]), (2, ids["/estimator"]), (3, ids["/tf"])],
+    )
+    .await;
+    let mut received: BTreeMap<u32, Vec<(u64, Value)>> = BTreeMap::new();
+    // Until the run ends: its viewer then stops and closes the connection.
+    while let Some((sub, t, v)) = next_data(&mut ws).await {
+        received.entry(sub).or_default().push((t, v));
+    }
+    let output = run.await.expect("join").expect("run output");
+    // Read the emulator to its end (it reports the walk when the host lets go).
+    let mut rest = String::new();
+    std::io::Read::read_to_string(&mut emulator_out, &mut rest).expect("emulator output");
+    assert!(emulator.wait().expect("emulator").success(), "{rest}");
+    assert!(rest.contains("fall: none"), "{rest}");
+    let stdout = String::from_utf8_lossy(&output.stdout).to_string();
+    eprintln!("{stdout}\n{}", String::from_utf8_lossy(&output.stderr));
+    assert!(output.status.success());
+    assert!(stdout.contains("ran 20000 ticks"), "{stdout}");
+    assert!(stdout.contains("adam live: open Foxglove"), "{stdout}");
+    assert!(
+        stdout.contains("1 accepted"),
+        "the viewer's report: {stdout}"
+    );
+
+    let logged = log_messages(&log);
+    for (sub, topic) in [(1, "/joints"), (2, "/estimator")] {
+        let by_time: HashMap<u64, &Value> = logged[topic].iter().map(|(t, v)| (*t, v)).collect();
+        let got = received.get(&sub).map(Vec::as_slice).unwrap_or_default();
+        assert!(got.len() >= 100, "{topic}: {} messages", got.len());
+        let span_s = (got[got.len() - 1].0 - got[0].0) as f64 * 1e-9;
+        assert!(span_s >= 1.0, "{topic}: {span_s} s of samples");
+        for (t, v) in got {
+            let l = by_time
+                .get(t)
+                .unwrap_or_else(|| panic!("{topic} at {t} ns is not in the log"));
+            assert_eq!(*l, v, "{topic} at {t} ns");
+        }
+    }
+    let tf = received.get(&3).map(Vec::as_slice).unwrap_or_default();
+    assert!(tf.len() >= 10, "{} /tf messages", tf.len());
+    for (_, m) in tf {
+        let children: Vec<&str> = m["transforms"]
+            .as_array()
+            .expect("transforms")
+            .iter()
+            .map(|t| t["child_frame_id"].as_str().expect("child"))
+            .collect();
+        assert!(children.contains(&"torso") && children.contains(&"left_shin"));
+        assert!(
+            children.iter().all(|c| !c.starts_with("truth/")),
+            "no ground truth over UDP: {children:?}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Foxglove's indexed MCAP reader refuses a file with a chunk that has no message index
+/// ("Chunks without message indexes are not currently supported"): the writer once closed a
+/// chunk of schemas and channels alone (by writing its attachments after them), and Foxglove
+/// opened no demo log. Every chunk of a log now holds messages and has their index.
+#[test]
+fn every_chunk_of_a_log_has_a_message_index_as_foxglove_requires() {
+    let setup = runtime::Setup::shipped().expect("setup");
+    let log = temp_log("chunks");
+    let mut options = runtime::sim::run::SimWalkOptions::new(2.0);
+    options.log_path = Some(log.clone());
+    runtime::sim::run::walk(&setup, &options).expect("walk");
+    let bytes = std::fs::read(&log).expect("log");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("summary")
+        .expect("summary");
+    assert!(
+        summary.chunk_indexes.len() >= 2,
+        "{} chunks",
+        summary.chunk_indexes.len()
+    );
+    for (i, c) in summary.chunk_indexes.iter().enumerate() {
+        assert!(
+            c.message_index_length > 0 && !c.message_index_offsets.is_empty(),
+            "chunk {i} at {} has no message index",
+            c.chunk_start_offset
+        );
+    }
+    assert_eq!(summary.attachment_indexes.len(), 3, "gait, config, URDF");
     std::fs::remove_file(&log).ok();
 }

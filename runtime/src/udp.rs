@@ -47,10 +47,14 @@ pub struct UdpRunOptions {
     /// Bind bus 0's socket here, bus `k`'s at its port + `k` (what a gateway's cannelloni
     /// sends to); `None`: ports the OS picks.
     pub bind: Option<SocketAddr>,
+    /// Publish each tick's state sample over iceoryx2 (`telemetry.service_name`), for
+    /// `adam live` and `adam op`.
+    pub publish: bool,
 }
 
 impl UdpRunOptions {
-    /// `duration_s` walking from the first tick, simulated clock, a 100 ms reply timeout, no log.
+    /// `duration_s` walking from the first tick, simulated clock, a 100 ms reply timeout, no log,
+    /// no publishing.
     pub fn new(duration_s: f64) -> Self {
         Self {
             duration_s,
@@ -60,6 +64,7 @@ impl UdpRunOptions {
             reply_timeout: Duration::from_millis(100),
             log_path: None,
             bind: None,
+            publish: false,
         }
     }
 }
@@ -122,6 +127,7 @@ pub fn walk(
     loop_options.script.sort_by(|a, b| a.0.total_cmp(&b.0));
     loop_options.log_path = options.log_path.clone();
     loop_options.realtime = options.real_time;
+    loop_options.publish = options.publish;
     let (summary, bus) = if options.real_time {
         crate::run(setup, bus, MonotonicClock, loop_options, None)?
     } else {

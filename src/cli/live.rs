@@ -1,13 +1,15 @@
 //! `adam live`: the live view in Foxglove, in its own process ([`runtime::live`]); and `--live`
 //! on `adam run` and `adam demo`, which start it beside the run as a child process of this
-//! executable and stop it when the run ends (by closing its standard input).
+//! executable, begin the run once it serves (subscribed to the run's samples), and stop it
+//! when the run ends (by closing its standard input).
 
 use crate::cli::shipped;
 use anyhow::{Context, Result};
-use std::io::Write;
+use std::io::{BufRead, BufReader, Write};
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
 use std::sync::Arc;
 
 /// Arguments of `adam live`.
@@ -44,7 +46,7 @@ pub(crate) struct LiveArgs {
 }
 
 /// `--live` on `adam run` and `adam demo`.
-#[derive(clap::Args, Clone, Debug)]
+#[derive(clap::Args, Clone, Debug, Default)]
 pub(crate) struct LiveFlags {
     /// Serve the run live to Foxglove (`adam live` beside the run) on ADDR, default
     /// 127.0.0.1:8765 (loopback; another interface only when named).
@@ -110,6 +112,24 @@ pub(crate) fn live(args: &LiveArgs) -> Result<()> {
 /// A running `adam live` child: stopped (stdin closed, then killed if it lingers) on drop.
 pub(crate) struct LiveChild {
     child: std::process::Child,
+    /// Copies the child's standard output to ours; joined after the child ends, so its last
+    /// line (the session's report) is printed before the run's process exits.
+    output: Option<std::thread::JoinHandle<()>>,
+}
+
+/// What an `adam live` child serves: the run's config and gait, and the overrides of
+/// `adam bench live`.
+pub(crate) struct LiveChildSpec<'a> {
+    /// The run's runtime config (its telemetry service locates the run).
+    pub(crate) config: &'a Path,
+    /// The gait the run walks.
+    pub(crate) gait: &'a Path,
+    /// The run drives the held motors too.
+    pub(crate) with_held: bool,
+    /// The iceoryx2 service of the samples, instead of the config's.
+    pub(crate) service: Option<&'a str>,
+    /// Drop the child's standard output (its banner and report) instead of printing it.
+    pub(crate) quiet: bool,
 }
 
 impl LiveFlags {
@@ -120,9 +140,25 @@ impl LiveFlags {
         gait: &Path,
         with_held: bool,
     ) -> Result<Option<LiveChild>> {
+        self.spawn_child(&LiveChildSpec {
+            config,
+            gait,
+            with_held,
+            service: None,
+            quiet: false,
+        })
+    }
+
+    /// Starts `adam live` as `spec` says, if `--live` was given. Everything the child would
+    /// refuse (a port in use, a bad `--live-decimate`) is refused here first, before the run.
+    pub(crate) fn spawn_child(&self, spec: &LiveChildSpec<'_>) -> Result<Option<LiveChild>> {
         let Some(addr) = self.live else {
             return Ok(None);
         };
+        if let Some(d) = &self.live_decimate {
+            runtime::live::feed::Decimation::parse(d, "--live-decimate")
+                .map_err(anyhow::Error::msg)?;
+        }
         // Refuse a port in use here, naming it, before the run starts.
         drop(
             std::net::TcpListener::bind(addr)
@@ -134,9 +170,9 @@ impl LiveFlags {
             .arg("--addr")
             .arg(addr.to_string())
             .arg("--config")
-            .arg(config)
+            .arg(spec.config)
             .arg("--gait")
-            .arg(gait)
+            .arg(spec.gait)
             .arg("--until-stdin-closes")
             .stdin(std::process::Stdio::piped());
         if let Some(d) = &self.live_decimate {
@@ -145,26 +181,75 @@ impl LiveFlags {
         if self.live_commands {
             cmd.arg("--live-commands");
         }
-        if with_held {
+        if spec.with_held {
             cmd.arg("--with-held");
         }
-        let child = cmd.spawn().context("--live: cannot start `adam live`")?;
-        Ok(Some(LiveChild { child }))
+        if let Some(service) = spec.service {
+            cmd.arg("--service").arg(service);
+        }
+        cmd.stdout(std::process::Stdio::piped());
+        let mut child = cmd.spawn().context("--live: cannot start `adam live`")?;
+        let Some(stdout) = child.stdout.take() else {
+            anyhow::bail!("--live: `adam live` has no standard output");
+        };
+        let mut viewer = LiveChild {
+            child,
+            output: None,
+        };
+        // The run starts once the viewer has subscribed (its first line says it serves), so
+        // the viewer sees the run from its first sample.
+        let (ready_tx, ready_rx) = std::sync::mpsc::channel();
+        let quiet = spec.quiet;
+        viewer.output = Some(std::thread::spawn(move || {
+            let mut ready = Some(ready_tx);
+            for line in BufReader::new(stdout).lines() {
+                let Ok(line) = line else { break };
+                if !quiet {
+                    println!("{line}");
+                }
+                if let Some(tx) = ready.take() {
+                    let _ = tx.send(());
+                }
+            }
+        }));
+        match ready_rx.recv_timeout(VIEWER_START_TIMEOUT) {
+            Ok(()) => Ok(Some(viewer)),
+            Err(RecvTimeoutError::Disconnected) => {
+                let status = viewer.child.wait().context("--live: `adam live`")?;
+                anyhow::bail!("--live {addr}: `adam live` ended before serving ({status})")
+            }
+            Err(RecvTimeoutError::Timeout) => anyhow::bail!(
+                "--live {addr}: `adam live` did not start serving within {} s",
+                VIEWER_START_TIMEOUT.as_secs()
+            ),
+        }
     }
 }
+
+/// How long a run waits for its viewer to serve (it loads the setup and opens iceoryx2: well
+/// under a second here; this bounds only a hung start).
+const VIEWER_START_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(60);
 
 impl Drop for LiveChild {
     fn drop(&mut self) {
         if let Some(mut stdin) = self.child.stdin.take() {
             let _ = stdin.flush();
         }
+        let mut ended = false;
         for _ in 0..50 {
             if let Ok(Some(_)) = self.child.try_wait() {
-                return;
+                ended = true;
+                break;
             }
             std::thread::sleep(std::time::Duration::from_millis(100));
         }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        if !ended {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+        // The child is gone, so its standard output is at its end.
+        if let Some(output) = self.output.take() {
+            let _ = output.join();
+        }
     }
 }

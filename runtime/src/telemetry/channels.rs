@@ -73,7 +73,11 @@ pub fn channel_schemas(
         "code": {"type": "integer"}}, "additionalProperties": true});
     let transitions = json!({"type": "object", "properties": {
         "t_s": number(), "from": {"type": "string"}, "to": {"type": "string"}}});
-    let exact = || json!({"type": ["number", "string"]});
+    // One `type` per field: Foxglove's JSON-schema reader takes no type lists (see the tests).
+    let exact = || {
+        json!({"type": "number",
+            "description": "non-finite values are the strings \"NaN\", \"inf\", \"-inf\""})
+    };
     let motor = json!({"type": "object", "properties": {
         "fresh": {"type": "boolean"}, "q_rad": exact(), "dq_rad_s": exact(),
         "tau_nm": exact(), "temperature_c": exact(), "errors": {"type": "integer"}}});
@@ -81,8 +85,10 @@ pub fn channel_schemas(
     input["properties"]["t_s"] = exact();
     input["properties"]["tick"] = json!({"type": "integer"});
     input["properties"]["overrun_streak"] = json!({"type": "integer"});
-    input["properties"]["operator"] = json!({"type": ["string", "null"]});
-    input["properties"]["imu"] = json!({"type": ["object", "null"], "properties": {
+    input["properties"]["operator"] =
+        json!({"type": "string", "description": "null: no operator command this tick"});
+    input["properties"]["imu"] = json!({"type": "object",
+        "description": "null: no IMU sample this tick", "properties": {
         "t_s": exact(), "gyro_pitch_rad_s": exact(), "accel_x_mps2": exact(),
         "accel_z_mps2": exact()}});
     let joint_command = json!({"type": "object", "properties": {
@@ -189,4 +195,66 @@ pub fn sample_messages(
         "tick_compute_us": s.tick_compute_ns as f64 * 1e-3,
     });
     [Value::Object(joints), hzd, estimator, state]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::telemetry::scene::scene_schemas;
+
+    /// Whether Foxglove's JSON-schema reader (the one its MCAP and WebSocket players use to
+    /// give a `jsonschema` channel its fields) takes `schema`: an object with `properties`,
+    /// each of one `type` (boolean, string, number, integer, object, array; no type lists, no
+    /// null), nested objects likewise, arrays with `items` of one such type. Anything else
+    /// makes the viewer refuse the whole topic ("Unsupported type [...]").
+    fn foxglove_reads(schema: &Value, path: &str) -> Result<(), String> {
+        if schema["type"] != "object" {
+            return Err(format!("{path}: type {} is not \"object\"", schema["type"]));
+        }
+        let props = schema["properties"]
+            .as_object()
+            .ok_or_else(|| format!("{path}: an object without properties"))?;
+        for (name, field) in props {
+            let at = format!("{path}.{name}");
+            match field["type"].as_str() {
+                Some("boolean" | "number" | "integer") => {}
+                Some("string") if field.get("contentEncoding").is_none() => {}
+                Some("object") => foxglove_reads(field, &at)?,
+                Some("array") => match field["items"]["type"].as_str() {
+                    Some("boolean" | "number" | "integer" | "string") => {}
+                    Some("object") => foxglove_reads(&field["items"], &at)?,
+                    _ => return Err(format!("{at}: array items {}", field["items"])),
+                },
+                _ => return Err(format!("{at}: type {}", field["type"])),
+            }
+        }
+        Ok(())
+    }
+
+    #[test]
+    fn every_schema_of_the_log_and_the_live_view_is_one_foxglove_reads() {
+        let joints: [Option<String>; SLOTS] =
+            std::array::from_fn(|i| (i % 2 == 0).then(|| format!("joint_{i}")));
+        let outputs: [String; OUTPUTS] = std::array::from_fn(|i| format!("y{i}"));
+        let schemas = channel_schemas(&joints, &outputs);
+        assert_eq!(schemas.len(), CHANNELS.len());
+        for c in &schemas {
+            foxglove_reads(&c.schema, c.topic).unwrap_or_else(|e| panic!("{e}"));
+        }
+        for (name, schema) in scene_schemas() {
+            foxglove_reads(&schema, name).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+
+    #[test]
+    fn what_foxglove_refuses_is_refused_here() {
+        let typed = |t: Value| json!({"type": "object", "properties": {"x": {"type": t}}});
+        assert!(foxglove_reads(&typed(json!("number")), "ok").is_ok());
+        assert!(foxglove_reads(&typed(json!(["number", "null"])), "list").is_err());
+        assert!(foxglove_reads(&typed(json!("null")), "null").is_err());
+        let bare_array = json!({"type": "object", "properties": {"a": {"type": "array"}}});
+        assert!(foxglove_reads(&bare_array, "array").is_err());
+        let no_props = json!({"type": "object", "properties": {"o": {"type": "object"}}});
+        assert!(foxglove_reads(&no_props, "object").is_err());
+    }
 }

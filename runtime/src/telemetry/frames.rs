@@ -99,7 +99,8 @@ impl FrameBatch {
 pub fn frame_schema() -> Value {
     let int = || json!({"type": "integer"});
     json!({"type": "object", "properties": {
-        "t_s": {"type": "number"}, "tick": {"type": ["integer", "null"]},
+        "t_s": {"type": "number"}, "tick": {"type": "integer",
+            "description": "null: outside the loop's ticks (activate, deactivate)"},
         "op": {"type": "string", "enum": ["activate", "exchange", "deactivate"]},
         "bus": int(), "dir": {"type": "string", "enum": ["tx", "rx"]}, "id": int(),
         "extended": {"type": "boolean"}, "remote": {"type": "boolean"}, "len": int(),

@@ -269,7 +269,9 @@ pub fn start(
     let mut writer = options
         .create(BufWriter::new(file))
         .map_err(|e| log_err(&path, e))?;
-    let ids = Channels::add(&mut writer, &context).map_err(|e| log_err(&path, e))?;
+    // Attachments and metadata first: each closes the open chunk, and a chunk of schemas and
+    // channels alone has no message index, which Foxglove's indexed reader refuses ("Chunks
+    // without message indexes are not currently supported").
     for (name, media, data) in [
         (
             ATTACHMENTS[0],
@@ -310,6 +312,7 @@ pub fn start(
             metadata: context.metadata.clone(),
         })
         .map_err(|e| log_err(&path, e))?;
+    let ids = Channels::add(&mut writer, &context).map_err(|e| log_err(&path, e))?;
     let (producer, mut consumer) = rtrb::RingBuffer::new(queue_capacity.max(2));
     let stop = Arc::new(AtomicBool::new(false));
     let dropped = Arc::new(AtomicU64::new(0));

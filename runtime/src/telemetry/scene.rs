@@ -64,8 +64,12 @@ pub fn scene_schemas() -> [(&'static str, Value); 3] {
             "type": {"type": "integer"}, "pose": pose, "thickness": {"type": "number"},
             "scale_invariant": {"type": "boolean"}, "points": {"type": "array", "items": vec3},
             "color": color}}}}});
+    // Every array names its items: Foxglove's JSON-schema reader needs their type.
+    let deletion = json!({"type": "object", "properties": {
+        "timestamp": time, "type": {"type": "integer"}, "id": {"type": "string"}}});
     let scene = json!({"type": "object", "properties": {
-        "deletions": {"type": "array"}, "entities": {"type": "array", "items": entity}}});
+        "deletions": {"type": "array", "items": deletion},
+        "entities": {"type": "array", "items": entity}}});
     let string = json!({"type": "object", "properties": {"data": {"type": "string"}}});
     [
         ("foxglove.FrameTransforms", tf),

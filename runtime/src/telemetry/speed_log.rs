@@ -16,7 +16,8 @@ pub const SPEED_TOPIC: &str = "/speed";
 
 /// The JSON schema of a `/speed` message.
 pub fn speed_schema() -> Value {
-    let number = || json!({"type": ["number", "null"]});
+    // One `type` per field (Foxglove's JSON-schema reader takes no type lists); null allowed.
+    let number = || json!({"type": "number", "description": "null when not known"});
     json!({"type": "object", "properties": {
         "t_s": number(), "belt_mps": number(), "offset_mps": number(),
         "requested_mps": number(), "commanded_mps": number(), "clamped": {"type": "boolean"},

@@ -97,20 +97,20 @@ fn row(
             .map_or(0, |d| d.as_nanos())
     );
     setup.config.telemetry.service_name = service.clone();
-    // A free port for the viewer.
+    // A free port for the viewer; `adam live` as `--live` on a run starts it.
     let addr = std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?;
-    let exe = std::env::current_exe()?;
-    let mut child = std::process::Command::new(exe)
-        .args(["live", "--until-stdin-closes", "--service", &service])
-        .arg("--addr")
-        .arg(addr.to_string())
-        .arg("--config")
-        .arg(config)
-        .arg("--gait")
-        .arg(gait)
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::null())
-        .spawn()
+    let flags = crate::cli::live::LiveFlags {
+        live: Some(addr),
+        ..Default::default()
+    };
+    let viewer = flags
+        .spawn_child(&crate::cli::live::LiveChildSpec {
+            config,
+            gait,
+            with_held: false,
+            service: Some(&service),
+            quiet: true,
+        })
         .context("starting `adam live`")?;
     let received = Arc::new(AtomicU64::new(0));
     let result = rt.block_on(async {
@@ -136,8 +136,8 @@ fn row(
         }
         anyhow::Ok(report)
     });
-    drop(child.stdin.take());
-    let _ = child.wait();
+    // Stops the viewer (closes its standard input, as at the end of a run).
+    drop(viewer);
     let report = result?;
     let s = &report.summary;
     Ok(Row {

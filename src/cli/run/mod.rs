@@ -95,7 +95,8 @@ pub(crate) struct RunArgs {
     /// A simulated motor mounted the other way round, by joint; repeatable (sim).
     #[arg(long)]
     sim_flip: Vec<String>,
-    /// The live view (sim: paces the run by the wall clock, as --real-time; can).
+    /// The live view (sim: paces the run by the wall clock, as --real-time; udp: at the run's
+    /// pace, lockstep with the emulator unless --real-time; can).
     #[command(flatten)]
     live: crate::cli::live::LiveFlags,
 }
@@ -225,7 +226,6 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--imu", args.imu.is_some()),
             given("--sim-offsets", args.sim_offsets.is_some()),
             given("--sim-flip", !args.sim_flip.is_empty()),
-            given("--live", args.live.live.is_some()),
         ]
         .into_iter()
         .flatten()
@@ -596,6 +596,9 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             options.real_time = real_time;
             options.bind = bind;
             options.log_path = log.clone();
+            // The same loop publishes its samples for the viewer, which starts before it.
+            options.publish = live.live.is_some();
+            let _viewer = live.spawn(&config, &gait, false)?;
             let (summary, link) = runtime::udp::walk(&setup, &motors, &options)?;
             println!("{}", RobotRunReport::of(&summary));
             println!(
