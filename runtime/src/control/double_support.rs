@@ -46,9 +46,12 @@
 //! The launch's first steps are quick (0.44–0.46 s against 0.90 s), then each is slower than the
 //! last, through 0.90 s and on until the robot falls back onto its rear foot and the step timeout
 //! trips: `runtime/tests/stand_sim.rs` at 13.84 s (steps … 0.90, 1.08, 1.45 s), restart_sim's
-//! launch on a moving belt at seed 3 (ignored test `the_replanned_gait_walks_on_from_stand`).
-//! `walk.reference_lead_s` moves the drift but does not remove it (0.2–0.3 ms pass stand_sim's
-//! walk and fail seeds 1–2 of that launch). And Stand after the 0.20 m braking step still rocks
+//! launch on a moving belt at seeds 3, 4 and 5 of 1–5 (ignored test
+//! `the_replanned_gait_walks_on_from_stand`). `walk.reference_lead_s` moves the drift but does not
+//! remove it (0.2–0.3 ms pass stand_sim's walk and fail seeds 1–2 of that launch). A 2 Hz phase
+//! observer (`walk.phase_observer_hz`) removes it (that launch walks 30 s at seeds 1–8, and
+//! stand_sim's 22 s walk), but then every Stop falls (seeds 1–5, braking steps 0.20–0.26 m):
+//! the lead to follow, with the braking step under the observer to be understood first. And Stand after the 0.20 m braking step still rocks
 //! 3 s after the landing (`runtime/tests/stop_sim.rs`: kinetic energy 2.1e-4 J, limit 1e-4 J).
 
 use crate::slots::LEG_SLOTS;
