@@ -122,8 +122,8 @@ fn the_replanned_gait_walks_again_after_a_stop_with_a_shorter_braking_step() {
 /// 0.78, 0.95, 1.37 s, falls back onto its rear foot and trips the step timeout at 11.06 s (Walk at
 /// 2.1 s); seeds 4 and 5 stall too, 1 and 2 walk on. The same drift stalls
 /// `runtime/tests/stand_sim.rs` with the re-plan (steps 0.46 … 1.08, 1.45 s; step timeout at
-/// 13.84 s). A 2 Hz phase observer removes the drift but makes every Stop fall
-/// (`runtime::control::double_support`).
+/// 13.84 s). A 2 Hz phase observer ends the stalls only by walking twice as fast as planned,
+/// and every Stop then falls (`runtime::control::double_support`).
 #[test]
 #[ignore = "the re-planned default gait's walk from Stand slows step after step until it stalls (seeds 3-5 of 1-5; seed 3: step timeout 9.0 s after Walk)"]
 fn the_replanned_gait_walks_on_from_stand() {

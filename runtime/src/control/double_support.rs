@@ -49,9 +49,10 @@
 //! launch on a moving belt at seeds 3, 4 and 5 of 1–5 (ignored test
 //! `the_replanned_gait_walks_on_from_stand`). `walk.reference_lead_s` moves the drift but does not
 //! remove it (0.2–0.3 ms pass stand_sim's walk and fail seeds 1–2 of that launch). A 2 Hz phase
-//! observer (`walk.phase_observer_hz`) removes it (that launch walks 30 s at seeds 1–8, and
-//! stand_sim's 22 s walk), but then every Stop falls (seeds 1–5, braking steps 0.20–0.26 m):
-//! the lead to follow, with the braking step under the observer to be understood first. And Stand after the 0.20 m braking step still rocks
+//! observer (`walk.phase_observer_hz`) ends the stalls (that launch walks 30 s at seeds 1–8, and
+//! stand_sim's 22 s walk) only by walking another orbit: steps of 0.44–0.56 s, about twice the
+//! planned speed, and every Stop then vaults over the front foot (seeds 1–5, braking steps
+//! 0.20–0.26 m; seed 1: 0.215 m braking step, 0.2 m/s at Stand, falls 1.2 s later). Not a fix. And Stand after the 0.20 m braking step still rocks
 //! 3 s after the landing (`runtime/tests/stop_sim.rs`: kinetic energy 2.1e-4 J, limit 1e-4 J).
 
 use crate::slots::LEG_SLOTS;
