@@ -23,7 +23,10 @@ mod common;
 /// Walks from the planned state, Stop at 3 s, Walk at 10 s, to 20 s: no trip, no fall, the
 /// states in order, and at least 8 steps after the second Walk.
 fn walk_stop_walk(seed: u64, belt_speed_mps: Option<f64>) {
-    let setup = Setup::shipped().expect("setup");
+    walk_stop_walk_with(&Setup::shipped().expect("setup"), seed, belt_speed_mps);
+}
+
+fn walk_stop_walk_with(setup: &Setup, seed: u64, belt_speed_mps: Option<f64>) {
     let end_s = 20.0;
     let mut walk = SimWalkOptions::new(end_s);
     walk.seed = seed;
@@ -32,12 +35,12 @@ fn walk_stop_walk(seed: u64, belt_speed_mps: Option<f64>) {
     // operator stops the belt when the robot stops); the subject here is the controller's
     // restart: an endless belt.
     walk.belt_length_m = f64::INFINITY;
-    let backend = sim_backend(&setup, &walk).expect("backend");
+    let backend = sim_backend(setup, &walk).expect("backend");
     let mut options = LoopOptions::simulation(end_s);
     options.start_walking = true;
     options.script = vec![(3.0, OperatorCommand::Stop), (10.0, OperatorCommand::Walk)];
     let (summary, backend) =
-        runtime::run(&setup, backend, SimulatedClock::default(), options, None).expect("run");
+        runtime::run(setup, backend, SimulatedClock::default(), options, None).expect("run");
     let sim = backend.plant();
     let context = format!(
         "seed {seed}, belt {belt_speed_mps:?}: {:?}",
@@ -83,6 +86,51 @@ fn walk_after_a_stop_walks_again() {
 fn walk_after_a_stop_walks_again_on_a_belt_at_a_quarter_metre_per_second() {
     for seed in 1..=5 {
         walk_stop_walk(seed, Some(0.25));
+    }
+}
+
+/// The graded-mesh re-plan of the default gait (`runtime/tests/fixtures/adam_codesign_graded.json`:
+/// `adam plan --robot configs/robots/adam_codesign.urdf`, 0.1686 m in 0.9000 s, orbit +0.28 %;
+/// its URDF path pointed at `configs/robots/`) with a braking step of `stop_m`.
+fn replanned(stop_m: f64) -> Setup {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+    let mut setup = Setup::load(
+        root.join("configs/runtime/adam.toml"),
+        root.join("runtime/tests/fixtures/adam_codesign_graded.json"),
+    )
+    .expect("the re-planned gait");
+    setup.config.walk.stop_step_length_m = stop_m;
+    setup
+}
+
+/// The re-planned default gait restarts after a Stop once its braking step is 0.20 m (seeds 1–5;
+/// measured 10 of 10 seeds for 0.20–0.22 m, 9 of 10 at 0.23 m): a shorter braking step leaves
+/// the feet nearer the gait's own stance width (0.20–0.24 m apart after Stand's rocking), so the
+/// launch needs less crouch. With the shipped 0.24 m it restarts in none of seeds 1–5 (the feet
+/// 0.26–0.30 m apart; `runtime::control::double_support`).
+#[test]
+fn the_replanned_gait_walks_again_after_a_stop_with_a_shorter_braking_step() {
+    let setup = replanned(0.20);
+    for seed in 1..=5 {
+        walk_stop_walk_with(&setup, seed, Some(0.0));
+    }
+}
+
+/// Why the re-plan is not the default yet: its walk from Stand drifts. After the launch the
+/// first steps are quick (0.44 s against 0.90 s planned), then every step is slower than the
+/// last, through the planned duration and on to a stall: seed 3 steps 0.44, 0.59, 0.62, 0.69,
+/// 0.78, 0.95, 1.37 s, falls back onto its rear foot and trips the step timeout at 11.06 s (Walk at
+/// 2.1 s); seeds 4 and 5 stall too, 1 and 2 walk on. The same drift stalls
+/// `runtime/tests/stand_sim.rs` with the re-plan (steps 0.46 … 1.08, 1.45 s; step timeout at
+/// 13.84 s). A 2 Hz phase observer ends the stalls only by walking twice as fast as planned,
+/// and every Stop then falls (`runtime::control::double_support`).
+#[test]
+#[ignore = "the re-planned default gait's walk from Stand slows step after step until it stalls (seeds 3-5 of 1-5; seed 3: step timeout 9.0 s after Walk)"]
+fn the_replanned_gait_walks_on_from_stand() {
+    let setup = replanned(0.20);
+    for seed in 1..=5 {
+        let r = walk_from_stand(&setup, seed, f64::INFINITY, None);
+        assert_walks_on(&r, &format!("re-planned gait, seed {seed}"));
     }
 }
 

@@ -110,8 +110,9 @@ fn the_simulated_robot_ramps_stands_walks_from_stand_stops_and_stands_again() {
             ControlState::Stop,
             ControlState::Stand
         ],
-        "{:?}",
-        summary.transitions
+        "{:?}, trip {:?}",
+        summary.transitions,
+        summary.trip
     );
     assert_eq!(summary.trip, None);
     assert!(
