@@ -30,9 +30,18 @@ fn gaits_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/gaits")
 }
 
-/// The verified orbit's step against the plan: (duration error, length error), relative.
-fn mismatch(report: &VerifyReport) -> (f64, f64) {
-    report.plan_mismatch()
+/// One line of the printed table: the planned step against the verified orbit's.
+fn row(what: &str, gait: &GaitFile, report: &VerifyReport) -> String {
+    let (d, l) = report.plan_mismatch();
+    format!(
+        "{what}: planned {:.4} m in {:.4} s, orbit {:.4} m in {:.4} s ({:+.2} %, {:+.2} %)",
+        gait.step_length_m,
+        gait.step_duration_s,
+        report.step_length_m,
+        report.step_duration_s,
+        100.0 * d,
+        100.0 * l
+    )
 }
 
 /// Verifies `gait` on `model`: a stable periodic orbit (the fixed point converged, |λ| < 1).
@@ -46,7 +55,7 @@ fn verify(what: &str, model: &PlanarModel, gait: &GaitFile) -> VerifyReport {
 }
 
 fn within_accuracy(report: &VerifyReport) -> bool {
-    let (d, l) = mismatch(report);
+    let (d, l) = report.plan_mismatch();
     d.abs() < PLAN_ACCURACY && l.abs() < PLAN_ACCURACY
 }
 
@@ -76,16 +85,8 @@ fn every_shipped_gait_steps_within_plan_accuracy_of_its_plan() {
             let (gait, model) =
                 planner::verify::load_gait_and_robot(path).unwrap_or_else(|e| panic!("{e}"));
             let report = verify(&name, &model, &gait);
-            let (d, l) = mismatch(&report);
-            table.push(format!(
-                "{name}: planned {:.4} m in {:.4} s, orbit {:.4} m in {:.4} s ({:+.2} %, {:+.2} %)",
-                gait.step_length_m,
-                gait.step_duration_s,
-                report.step_length_m,
-                report.step_duration_s,
-                100.0 * d,
-                100.0 * l
-            ));
+            let (d, l) = report.plan_mismatch();
+            table.push(row(&name, &gait, &report));
             match KNOWN_OFF.iter().find(|(n, _)| *n == name) {
                 Some((_, why)) => assert!(
                     !within_accuracy(&report),
@@ -144,7 +145,7 @@ fn check_library(path: &Path, name: &str, table: &mut Vec<String>) {
             gait.step_duration_s
         );
         let report = verify(&what, &model, gait);
-        let (d, l) = mismatch(&report);
+        let (d, l) = report.plan_mismatch();
         assert!(
             within_accuracy(&report),
             "{what}: ({d:+.4}, {l:+.4})\n{report}"
@@ -159,14 +160,6 @@ fn check_library(path: &Path, name: &str, table: &mut Vec<String>) {
             stored.verified_step_length_m,
             stored.verified_step_duration_s
         );
-        table.push(format!(
-            "{what}: planned {:.4} m in {:.4} s, orbit {:.4} m in {:.4} s ({:+.2} %, {:+.2} %)",
-            gait.step_length_m,
-            gait.step_duration_s,
-            report.step_length_m,
-            report.step_duration_s,
-            100.0 * d,
-            100.0 * l
-        ));
+        table.push(row(&what, gait, &report));
     }
 }
