@@ -515,6 +515,93 @@ mod tests {
         );
     }
 
+    /// A library plan: a task per speed of its settings.
+    fn library_plan() -> SweepPlan {
+        let speeds = vec![0.2, 0.225, 0.25];
+        SweepPlan {
+            study: Study::Library,
+            task_count: speeds.len(),
+            design: None,
+            library: Some(LibrarySettings {
+                speeds_mps: speeds.clone(),
+                max_step_error: 0.01,
+                library_file: PathBuf::from("/tmp/sweep/adam_library.json"),
+            }),
+            tasks: speeds
+                .iter()
+                .enumerate()
+                .map(|(index, &v)| Task {
+                    index,
+                    initial_m: None,
+                    lengths_m: None,
+                    optimum_from_m: None,
+                    treadmill: None,
+                    speed_mps: Some(v),
+                })
+                .collect(),
+            ..plan()
+        }
+    }
+
+    #[test]
+    fn library_and_landscape_plans_round_trip_and_bad_library_settings_are_named() {
+        let p = library_plan();
+        let back = SweepPlan::parse(&p.to_toml().unwrap(), Path::new("l.toml")).unwrap();
+        assert_eq!(back, p);
+        let mut l = plan();
+        l.study = Study::Landscape;
+        l.design = Some(DesignGrid {
+            grid: 2,
+            inertia: planner::config::InertiaCoupling::Exact,
+            start: Some(crate::cli::codesign::StartArg::Neighbours),
+            sweep_grid: Some(2),
+        });
+        l.tasks[3] = Task {
+            index: 3,
+            initial_m: None,
+            lengths_m: None,
+            optimum_from_m: Some([0.24, 0.25]),
+            treadmill: None,
+            speed_mps: None,
+        };
+        let text = l.to_toml().unwrap();
+        assert!(text.contains("start = \"neighbours\""), "{text}");
+        assert_eq!(SweepPlan::parse(&text, Path::new("l.toml")).unwrap(), l);
+
+        let err = |p: &SweepPlan| {
+            SweepPlan::parse(&p.to_toml().unwrap(), Path::new("l.toml"))
+                .unwrap_err()
+                .to_string()
+        };
+        fn settings(p: &mut SweepPlan) -> &mut LibrarySettings {
+            p.library.as_mut().unwrap()
+        }
+        let mut p = library_plan();
+        settings(&mut p).speeds_mps[1] = 0.2;
+        p.tasks[1].speed_mps = Some(0.2);
+        let e = err(&p);
+        assert!(
+            e.contains("'library.speeds_mps[1]' = 0.2") && e.contains("increasing"),
+            "{e}"
+        );
+        let mut p = library_plan();
+        p.tasks[2].speed_mps = Some(0.3);
+        let e = err(&p);
+        assert!(e.contains("'tasks[2].speed_mps' = Some(0.3)"), "{e}");
+        let mut p = library_plan();
+        settings(&mut p).library_file = PathBuf::from("lib.json");
+        assert!(err(&p).contains("'library.library_file' = \"lib.json\""));
+        let mut p = library_plan();
+        settings(&mut p).max_step_error = f64::NAN;
+        assert!(err(&p).contains("'library.max_step_error' = NaN"));
+        let mut p = library_plan();
+        p.library = None;
+        assert!(err(&p).contains("field 'library': a library plan needs it"));
+        let mut p = library_plan();
+        p.tasks[0].speed_mps = None;
+        assert!(err(&p).contains("a library task needs 'speed_mps'"));
+    }
+
     proptest::proptest! {
         /// Any plan of positive lengths and any index count survives TOML bit for bit.
         #[test]
