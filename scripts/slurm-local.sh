@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # A one-node SLURM on this machine (Debian's slurm-wlm and munge), a small co-design sweep
-# submitted to it as a job array plus its collect job with sbatch, and the collected report
-# checked against the in-process `adam codesign sweep`: the same files, byte for byte.
+# and a small gait library submitted to it as job arrays plus their collect jobs with sbatch,
+# and the collected reports checked against the in-process `adam codesign sweep` (the same
+# files, byte for byte) and `adam plan library` (the same library but for solve times).
 #
 #   sudo bash scripts/slurm-local.sh            # as root: installs the packages if missing
-#   GRID=3 ADAM=target/release/adam bash scripts/slurm-local.sh
+#   GRID=3 SPEEDS=0.15:0.40:0.025 ADAM=target/release/adam bash scripts/slurm-local.sh
 #
 # It starts munged, slurmctld and slurmd with a private configuration under a temporary
 # folder, and stops every daemon it started on exit (success, failure or Ctrl-C). Debian 12
@@ -127,25 +128,31 @@ say "one-node SLURM up: $(sinfo -h -N -o '%N %T %c CPUs %m MB')"
 say "adam sweep plan --study codesign --grid $GRID"
 "$ADAM" sweep plan --study codesign --grid "$GRID" --out-dir "$work/sweep" \
     --out "$work/plan.toml" --time-per-task-min 10 --mem-per-task-mb 1024
-submitted=$("$ADAM" sweep slurm --plan "$work/plan.toml" --submit)
-echo "$submitted"
-array_id=$(sed -n 's/.*array job \([0-9]*\),.*/\1/p' <<<"$submitted")
-collect_id=$(sed -n 's/.*collect job \([0-9]*\) .*/\1/p' <<<"$submitted")
-[ -n "$array_id" ] && [ -n "$collect_id" ] || { echo "no job ids in: $submitted" >&2; exit 1; }
-t0=$(date +%s)
-while squeue -h -j "$array_id,$collect_id" 2>/dev/null | grep -q .; do
-    if (( $(date +%s) - t0 > TIMEOUT_S )); then
-        echo "jobs still queued after $TIMEOUT_S s:" >&2
-        squeue >&2
-        exit 1
-    fi
-    sleep 1
-done
-say "array job $array_id and collect job $collect_id done in $(( $(date +%s) - t0 )) s; the collect job's log:"
-cat "$work/sweep/logs/collect.out"
-grep -q "tasks have results (0 failed, 0 missing)" "$work/sweep/logs/collect.out" \
-    || { echo "the collect job did not find every result" >&2; exit 1; }
-ls "$work/sweep/logs"
+# Submits a plan's array and collect job with sbatch, waits for both, prints the collect log
+# and fails unless every task has a result. $1 the plan, $2 its out_dir.
+run_on_slurm() {
+    local plan=$1 out=$2 submitted array_id collect_id t0
+    submitted=$("$ADAM" sweep slurm --plan "$plan" --submit)
+    echo "$submitted"
+    array_id=$(sed -n 's/.*array job \([0-9]*\),.*/\1/p' <<<"$submitted")
+    collect_id=$(sed -n 's/.*collect job \([0-9]*\) .*/\1/p' <<<"$submitted")
+    [ -n "$array_id" ] && [ -n "$collect_id" ] || { echo "no job ids in: $submitted" >&2; exit 1; }
+    t0=$(date +%s)
+    while squeue -h -j "$array_id,$collect_id" 2>/dev/null | grep -q .; do
+        if (( $(date +%s) - t0 > TIMEOUT_S )); then
+            echo "jobs still queued after $TIMEOUT_S s:" >&2
+            squeue >&2
+            exit 1
+        fi
+        sleep 1
+    done
+    say "array job $array_id and collect job $collect_id done in $(( $(date +%s) - t0 )) s; the collect job's log:"
+    cat "$out/logs/collect.out"
+    grep -q "tasks have results (0 failed, 0 missing)" "$out/logs/collect.out" \
+        || { echo "the collect job did not find every result" >&2; exit 1; }
+    ls "$out/logs"
+}
+run_on_slurm "$work/plan.toml" "$work/sweep"
 
 # The same study in one process, and the two reports compared.
 say "adam codesign sweep --grid $GRID (in-process)"
@@ -156,3 +163,20 @@ for f in table.md sweep.csv sweep.json convergence.svg convergence.png; do
     say "identical: $f"
 done
 say "the SLURM sweep's report equals the in-process one"
+
+# The gait library as a job array: a task per speed, each solving the chain from the middle
+# speed out to its own again; the library equals adam plan library's but for the gaits'
+# recorded solve times (wall times).
+SPEEDS=${SPEEDS:-0.2:0.3:0.025}
+say "adam sweep plan --study library --speeds $SPEEDS"
+"$ADAM" sweep plan --study library --speeds "$SPEEDS" --out-dir "$work/library" \
+    --out "$work/library.toml" --time-per-task-min 10 --mem-per-task-mb 1024
+run_on_slurm "$work/library.toml" "$work/library"
+say "adam plan library --speeds $SPEEDS (in-process)"
+mkdir -p "$work/inlib"
+"$ADAM" plan library --speeds "$SPEEDS" --out "$work/inlib/adam_library.json" >"$work/inlib.log"
+tail -2 "$work/inlib.log"
+diff <(grep -v '"solve_time_s"' "$work/inlib/adam_library.json") \
+    <(grep -v '"solve_time_s"' "$work/library/adam_library.json")
+say "identical but for the solve times: adam_library.json ($(grep -c '"solve_time_s"' "$work/library/adam_library.json") gaits)"
+say "the SLURM library equals the in-process one"

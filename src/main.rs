@@ -114,8 +114,8 @@ enum Command {
         command: can::CanCommand,
     },
     /// A study as independent tasks for a cluster (SLURM job arrays): `adam sweep plan
-    /// --study codesign|landscape|treadmill`, `adam sweep slurm --plan P [--submit]`, `adam
-    /// sweep task --plan P [--index I]`, `adam sweep collect --plan P`.
+    /// --study codesign|landscape|library|treadmill`, `adam sweep slurm --plan P
+    /// [--submit]`, `adam sweep task --plan P [--index I]`, `adam sweep collect --plan P`.
     Sweep {
         #[command(subcommand)]
         command: sweep::SweepCommand,

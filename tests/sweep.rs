@@ -256,9 +256,35 @@ fn changed_inputs_bad_indices_other_versions_and_corrupt_results_are_named() {
         assert_ne!(now, planned);
     }
     assert!(!results.join("task-00000.json").exists());
-    // The library is not a sweep study yet, and says why.
-    let (ok, _, err) = run(&["sweep", "plan", "--study", "library", "--out", &s(&old)]);
-    assert!(!ok && err.contains("--study library"), "{err}");
+    // A flag of another study is refused, naming it.
+    let (ok, _, err) = run(&[
+        "sweep",
+        "plan",
+        "--study",
+        "library",
+        "--grid",
+        "2",
+        "--out",
+        &s(&old),
+    ]);
+    assert!(
+        !ok && err.contains("--grid: not used by the library study"),
+        "{err}"
+    );
+    let (ok, _, err) = run(&[
+        "sweep",
+        "plan",
+        "--study",
+        "codesign",
+        "--speeds",
+        "0.2,0.3",
+        "--out",
+        &s(&old),
+    ]);
+    assert!(
+        !ok && err.contains("--speeds: not used by the codesign study"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -344,43 +370,92 @@ fn every_task(plan: &Path, n: usize) {
     }
 }
 
+/// Runs every task of `plan` as job-array elements (`SLURM_ARRAY_TASK_ID`), two at a time as
+/// a 2-core node would; panics naming a failed one.
+fn every_task_as_array(plan: &Path, n: usize) {
+    let indices: Vec<usize> = (0..n).collect();
+    for pair in indices.chunks(2) {
+        let children: Vec<Child> = pair.iter().map(|&i| array_task(plan, i)).collect();
+        for (c, i) in children.into_iter().zip(pair) {
+            let (ok, out, err) = finish(c);
+            assert!(ok && out.contains("wrote"), "task {i}: {out}{err}");
+        }
+    }
+}
+
 #[test]
-fn a_landscape_plan_collects_to_the_grid_of_the_in_process_landscape() {
+fn a_landscape_plan_collects_to_the_in_process_landscape_report() {
     let dir = scratch("landscape");
-    // No convergence study in the in-process command: an empty sweep file to draw.
-    let ends = dir.join("sweep.json");
-    std::fs::write(&ends, "{\"schema_version\": 1, \"runs\": []}").expect("sweep.json");
+    // The shipped config with a 2 × 2 convergence study (its 5 × 5 takes minutes here).
+    let config = dir.join("planner.toml");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/planner/adam.toml"),
+    )
+    .expect("config");
+    assert_eq!(
+        text.matches("\ngrid = 5 ").count(),
+        1,
+        "the sweep's grid line"
+    );
+    std::fs::write(&config, text.replace("\ngrid = 5 ", "\ngrid = 2 ")).expect("config");
+    // The in-process default: each grid point from its inner neighbour's solution.
     let inproc = dir.join("inproc");
-    let (ok, _, err) = run(&[
+    let (ok, out, err) = run(&[
         "codesign",
         "landscape",
         "--grid",
-        "2",
-        "--start",
-        "initial",
-        "--sweep",
-        &s(&ends),
+        "3",
+        "--config",
+        &s(&config),
         "--out-dir",
         &s(&inproc),
     ]);
-    assert!(ok, "{err}");
+    assert!(ok, "{out}{err}");
     let plan = dir.join("plan.toml");
     let array = dir.join("array");
-    let (ok, _, err) = sweep_plan("landscape", &s(&array), &plan, &["--grid", "2"]);
-    assert!(ok, "{err}");
-    every_task(&plan, 4);
+    let (ok, out, err) = sweep_plan(
+        "landscape",
+        &s(&array),
+        &plan,
+        &["--grid", "3", "--config", &s(&config)],
+    );
+    // 9 grid points, the optimum, 4 convergence-study runs.
+    assert!(ok && out.contains("14 tasks (0..=13)"), "{out}{err}");
+    let plan_text = std::fs::read_to_string(&plan).expect("plan");
+    assert!(plan_text.contains("start = \"neighbours\""), "{plan_text}");
+    every_task_as_array(&plan, 14);
     let (ok, out, err) = run(&["sweep", "collect", "--plan", &s(&plan)]);
     assert!(ok, "{out}{err}");
-    assert_eq!(
-        read(&inproc.join("landscape.csv")),
-        read(&array.join("landscape.csv"))
+    // The whole report is the in-process one, file for file (times are printed, not written).
+    for f in [
+        "landscape.csv",
+        "activity.md",
+        "sweep.json",
+        "landscape.svg",
+        "landscape.png",
+    ] {
+        assert!(
+            read(&inproc.join(f)) == read(&array.join(f)),
+            "{f} differs:\n{}\n---\n{}",
+            String::from_utf8_lossy(&read(&inproc.join(f))),
+            String::from_utf8_lossy(&read(&array.join(f)))
+        );
+    }
+    let activity = String::from_utf8_lossy(&read(&array.join("activity.md"))).into_owned();
+    for words in [
+        "neighbour start",
+        "Best grid point: thigh",
+        "## Co-design optimum",
+        "4 convergence-study endpoints drawn",
+        "Active constraints at the optimum",
+    ] {
+        assert!(activity.contains(words), "{words}:\n{activity}");
+    }
+    let csv = String::from_utf8_lossy(&read(&array.join("landscape.csv"))).into_owned();
+    assert!(
+        csv.contains(",true,"),
+        "no point started from a neighbour:\n{csv}"
     );
-    // The collected Markdown is the grid's part of the in-process activity.md, word for word.
-    let grid = String::from_utf8_lossy(&read(&array.join("landscape.md"))).into_owned();
-    let activity = String::from_utf8_lossy(&read(&inproc.join("activity.md"))).into_owned();
-    assert!(grid.contains("Best grid point: thigh"), "{grid}");
-    assert!(activity.starts_with(&grid), "{grid}\n---\n{activity}");
-    assert!(array.join("landscape.png").exists() && array.join("landscape.svg").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -404,5 +479,219 @@ fn a_treadmill_plan_collects_to_the_tables_of_the_bench() {
     assert!(ok, "{err}");
     assert!(tables.contains("(d) start and restart"), "{tables}");
     assert!(bench.contains(&tables), "{tables}\n---\n{bench}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Every "solve_time_s" of a JSON document set to 0: the one field of a gait that is a wall
+/// time, different between any two runs of the same plan.
+fn without_solve_times(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            for (k, x) in m.iter_mut() {
+                if k == "solve_time_s" {
+                    *x = serde_json::Value::from(0.0);
+                } else {
+                    without_solve_times(x);
+                }
+            }
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(without_solve_times),
+        _ => {}
+    }
+}
+
+#[test]
+fn a_library_plan_run_as_an_array_collects_to_the_in_process_library() {
+    let dir = scratch("library");
+    let (inproc, array, plan) = (dir.join("inproc"), dir.join("array"), dir.join("plan.toml"));
+    std::fs::create_dir_all(&inproc).expect("inproc dir");
+    // Five speeds: the anchor 0.25 m/s, walks of two speeds down and two up, so the tasks of
+    // the ends solve their neighbour again on the way.
+    let speeds = "0.2:0.3:0.025";
+    let in_lib = inproc.join("adam_library.json");
+    let (ok, table, err) = run(&["plan", "library", "--speeds", speeds, "--out", &s(&in_lib)]);
+    assert!(ok, "{table}{err}");
+    let (ok, out, err) = sweep_plan("library", &s(&array), &plan, &["--speeds", speeds]);
+    assert!(ok && out.contains("5 tasks (0..=4)"), "{out}{err}");
+    // Collect before any task: nothing written, every task named missing.
+    let (ok, out, err) = run(&["sweep", "collect", "--plan", &s(&plan)]);
+    assert!(!ok && err.contains("--array=0-4"), "{out}{err}");
+    assert!(
+        out.contains("not written") && !array.join("adam_library.json").exists(),
+        "{out}"
+    );
+    // The tasks as a job array runs them, two at a time.
+    for group in [&[4, 0][..], &[1, 3][..], &[2][..]] {
+        let children: Vec<Child> = group.iter().map(|&i| array_task(&plan, i)).collect();
+        for c in children {
+            let (ok, out, err) = finish(c);
+            assert!(ok && out.contains("wrote"), "{out}{err}");
+        }
+    }
+    let (ok, out, err) = run(&["sweep", "collect", "--plan", &s(&plan)]);
+    assert!(ok, "{out}{err}");
+    assert!(
+        out.contains("5 of 5 tasks have results (0 failed, 0 missing)"),
+        "{out}"
+    );
+    // The library file is the in-process one but for the solves' wall times.
+    let json = |p: &Path| {
+        let mut v: serde_json::Value = serde_json::from_slice(&read(p)).expect("JSON");
+        without_solve_times(&mut v);
+        v
+    };
+    let arr_lib = array.join("adam_library.json");
+    assert_eq!(json(&in_lib), json(&arr_lib), "the libraries differ");
+    // library.md is the in-process table row for row, without the solve-time column.
+    let md = String::from_utf8_lossy(&read(&array.join("library.md"))).into_owned();
+    let rows: Vec<&str> = md
+        .lines()
+        .filter(|l| l.trim_start().starts_with("0."))
+        .collect();
+    assert_eq!(rows.len(), 5, "{md}");
+    for row in &rows {
+        assert!(
+            table.lines().any(|l| l.starts_with(row)),
+            "{row}\nnot in\n{table}"
+        );
+    }
+    assert_eq!(
+        rows.iter().filter(|r| r.contains(" cold ")).count(),
+        1,
+        "{md}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The `planned` and `now` hashes of a refusal (`SHA-256 <planned> in the plan, <now> now`).
+fn refused_hashes(err: &str) -> (String, String) {
+    let planned = err
+        .split("SHA-256 ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .expect("the plan's hash");
+    let now = err
+        .split("in the plan, ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .expect("the hash now");
+    (planned.to_string(), now.to_string())
+}
+
+#[test]
+fn every_input_that_changes_a_result_is_hashed_and_a_changed_one_refused() {
+    let dir = scratch("inputs");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (from, to) in [
+        (
+            "configs/robots/adam_codesign.urdf",
+            "robots/adam_codesign.urdf",
+        ),
+        ("configs/gaits/adam_library.json", "gaits/adam_library.json"),
+        (
+            "configs/planner/adam_library.toml",
+            "planner/adam_library.toml",
+        ),
+    ] {
+        std::fs::create_dir_all(dir.join(to).parent().expect("a folder")).expect("mkdir");
+        std::fs::copy(repo.join(from), dir.join(to)).expect("copy");
+    }
+    // A runtime config that names the library copy for speed control.
+    let runtime = std::fs::read_to_string(repo.join("configs/runtime/adam.toml")).expect("cfg");
+    let runtime = runtime.replacen(
+        "[speed]\n",
+        "[speed]\nlibrary = \"../gaits/adam_library.json\"\n",
+        1,
+    );
+    std::fs::create_dir_all(dir.join("runtime")).expect("mkdir");
+    std::fs::write(dir.join("runtime/adam.toml"), runtime).expect("w");
+
+    // The treadmill plan hashes the config, the gait, its robot, the library and its robot.
+    let tread = dir.join("treadmill.toml");
+    let (ok, _, err) = sweep_plan(
+        "treadmill",
+        &s(&dir.join("out-t")),
+        &tread,
+        &[
+            "--quick",
+            "--seeds",
+            "1",
+            "--runtime-config",
+            &s(&dir.join("runtime/adam.toml")),
+        ],
+    );
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&tread).expect("plan");
+    for role in [
+        "runtime config",
+        "gait",
+        "robot",
+        "gait library",
+        "library robot",
+    ] {
+        assert!(
+            text.contains(&format!("role = \"{role}\"")),
+            "{role}:\n{text}"
+        );
+    }
+    // The library plan hashes the robot and the planner config.
+    let lib = dir.join("library.toml");
+    let (ok, _, err) = sweep_plan(
+        "library",
+        &s(&dir.join("out-l")),
+        &lib,
+        &[
+            "--speeds",
+            "0.2,0.225",
+            "--robot",
+            &s(&dir.join("robots/adam_codesign.urdf")),
+            "--config",
+            &s(&dir.join("planner/adam_library.toml")),
+        ],
+    );
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&lib).expect("plan");
+    for role in ["robot", "planner config"] {
+        assert!(
+            text.contains(&format!("role = \"{role}\"")),
+            "{role}:\n{text}"
+        );
+    }
+
+    // Each input changed in turn: the task and the collect refuse, naming the file and both
+    // hashes; restored, the plan holds again.
+    for (plan, file, roles) in [
+        (&tread, "gaits/adam_library.json", &["gait library"][..]),
+        (&tread, "robots/adam_codesign.urdf", &["library robot"][..]),
+        (&lib, "robots/adam_codesign.urdf", &["robot"][..]),
+        (&lib, "planner/adam_library.toml", &["planner config"][..]),
+    ] {
+        let path = dir.join(file);
+        let original = std::fs::read(&path).expect("input");
+        let mut changed = original.clone();
+        changed.extend_from_slice(b"\n");
+        std::fs::write(&path, &changed).expect("edit");
+        for args in [
+            &["sweep", "task", "--plan", &s(plan), "--index", "0"][..],
+            &["sweep", "collect", "--plan", &s(plan)][..],
+        ] {
+            let (ok, _, err) = run(args);
+            assert!(
+                !ok && err.contains("has changed since the plan") && err.contains(file),
+                "{args:?}: {err}"
+            );
+            assert!(
+                roles.iter().any(|r| err.contains(&format!("'{r}'"))),
+                "{err}"
+            );
+            let (planned, now) = refused_hashes(&err);
+            assert_eq!(planned.len(), 64, "{err}");
+            assert_eq!(now.len(), 64, "{err}");
+            assert_ne!(planned, now);
+        }
+        std::fs::write(&path, &original).expect("restore");
+    }
+    let (ok, out, err) = run(&["sweep", "slurm", "--plan", &s(&lib)]);
+    assert!(ok, "{out}{err}");
     std::fs::remove_dir_all(&dir).ok();
 }

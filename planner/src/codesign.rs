@@ -38,7 +38,8 @@ pub use activity::{activity, Activity, BoundSide, GroupActivity, ACTIVE_SLACK};
 pub use audit::{audit, audit_variants, Audit, AuditRow, AuditSolve, AuditVariant, WIDE_PITCH_RAD};
 pub use endpoints::{load_sweep_endpoints, save_sweep, SweepEndpoint};
 pub use landscape::{
-    grid_values, landscape, landscape_point, Landscape, LandscapePoint, LandscapeStart,
+    grid_values, landscape, landscape_point, landscape_point_from_neighbours, Landscape,
+    LandscapePoint, LandscapeStart,
 };
 pub use speeds::{codesign_speeds, MultiSpeedProblem, MultiSpeedResult};
 

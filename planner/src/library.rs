@@ -18,6 +18,11 @@
 //! library fails only when what is left has a hole wider than [`MAX_GAP_MPS`] (between two
 //! gaits, or between an end of the range asked for and the nearest gait).
 //!
+//! [`plan_speed`] is one speed of the same computation as an independent task (a gait-library
+//! sweep's task on a cluster, `adam sweep plan --study library`): the anchor's plan and the
+//! walk out to its speed, with the same steps as [`plan_library`] (the `Chains` of both are
+//! one function's), so the library the sweep collects is the in-process one.
+//!
 //! [`Schedule`] says how the two walks share the machine: one after the other, each solve's
 //! block evaluations spread over the rayon pool ([`Schedule::Sequential`]), or the two walks at
 //! once, each solve on one thread ([`Schedule::TwoChains`]).
@@ -141,8 +146,10 @@ pub fn parse_speeds(spec: &str) -> Result<Vec<f64>> {
     Ok(speeds)
 }
 
-/// How one speed of the library went.
-#[derive(Clone, Debug)]
+/// How one speed of the library went (also a gait-library sweep task's result, which
+/// `adam sweep task` writes as JSON).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SpeedOutcome {
     /// The speed asked for, m/s.
     pub speed_mps: f64,
@@ -245,38 +252,14 @@ pub fn plan_library(
     speeds_mps: &[f64],
     options: LibraryOptions,
 ) -> Result<LibraryPlan> {
-    config.validate("planner config")?;
     let start = Instant::now();
-    for w in speeds_mps.windows(2) {
-        if w[1] <= w[0] {
-            return Err(PlannerError::InvalidSpeeds {
-                spec: format!("{speeds_mps:?}"),
-                reason: format!("{} after {}: speeds must increase", w[1], w[0]),
-            });
-        }
-    }
-    let n = speeds_mps.len();
-    if n == 0 {
+    let chains = Chains::new(config, speeds_mps)?;
+    let robot = robot_reference(model, urdf_ref, urdf_text);
+    let mut solved: Vec<Option<std::result::Result<Solved, String>>> =
+        chains.refused.iter().map(|r| r.clone().map(Err)).collect();
+    let Some(anchor) = chains.anchor else {
         return Ok(LibraryPlan {
-            robot: robot_reference(model, urdf_ref, urdf_text),
-            outcomes: Vec::new(),
-            wall_time_s: 0.0,
-        });
-    }
-    // A speed no step within the config's length and duration bounds reaches is left out.
-    let mut solved: Vec<Option<std::result::Result<Solved, String>>> = speeds_mps
-        .iter()
-        .map(|&v| {
-            at_speed(config, v)
-                .validate("planner config")
-                .err()
-                .map(|e| Err(e.to_string()))
-        })
-        .collect();
-    let open: Vec<usize> = (0..n).filter(|&i| solved[i].is_none()).collect();
-    let Some(&middle) = open.get(open.len() / 2) else {
-        return Ok(LibraryPlan {
-            robot: robot_reference(model, urdf_ref, urdf_text),
+            robot,
             outcomes: solved
                 .into_iter()
                 .zip(speeds_mps)
@@ -285,33 +268,23 @@ pub fn plan_library(
             wall_time_s: start.elapsed().as_secs_f64(),
         });
     };
-    let first = solve_cold(model, urdf_ref, urdf_text, config, speeds_mps[middle]);
-    let seed = first.as_ref().ok().map(|s| s.x.clone());
-    solved[middle] = Some(first.map_err(|e| e.to_string()));
-    let down: Vec<usize> = open.iter().copied().filter(|&i| i < middle).rev().collect();
-    let up: Vec<usize> = open.iter().copied().filter(|&i| i > middle).collect();
-    let walk = |order: &[usize]| -> Vec<(usize, std::result::Result<Solved, String>)> {
-        let mut from = seed.clone();
-        order
-            .iter()
-            .map(|&i| {
-                let r = solve_speed(model, urdf_ref, urdf_text, config, speeds_mps[i], &from);
-                if let Ok(s) = &r {
-                    from = Some(s.x.clone());
-                }
-                (i, r.map_err(|e| e.to_string()))
-            })
-            .collect()
+    let job = Job {
+        model,
+        urdf_ref,
+        urdf_text,
+        config,
+        speeds_mps,
     };
-    // Whole solves run on the workers: a pool of its own with the stack of a main thread (a
-    // solve overflowed a 2 MiB test-thread stack), as the co-design landscape does.
-    let pool = rayon::ThreadPoolBuilder::new()
-        .stack_size(WORKER_STACK_BYTES)
-        .build()
-        .map_err(|e| PlannerError::Solver(format!("the library's thread pool: {e}")))?;
+    let first = job.solve_cold(anchor);
+    let seed = first.as_ref().ok().map(|s| s.x.clone());
+    solved[anchor] = Some(first.map_err(|e| e.to_string()));
+    let pool = worker_pool()?;
     let (slower, faster) = pool.install(|| match options.schedule {
-        Schedule::Sequential => (walk(&down), walk(&up)),
-        Schedule::TwoChains => rayon::join(|| walk(&down), || walk(&up)),
+        Schedule::Sequential => (job.walk(&chains.down, &seed), job.walk(&chains.up, &seed)),
+        Schedule::TwoChains => rayon::join(
+            || job.walk(&chains.down, &seed),
+            || job.walk(&chains.up, &seed),
+        ),
     });
     for (i, r) in slower.into_iter().chain(faster) {
         solved[i] = Some(r);
@@ -325,16 +298,195 @@ pub fn plan_library(
             .collect()
     });
     Ok(LibraryPlan {
-        robot: robot_reference(model, urdf_ref, urdf_text),
+        robot,
         outcomes,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
 }
 
+/// One speed of the library, `speeds_mps[index]`, as an independent task (a gait-library
+/// sweep's task, `adam sweep task`): its outcome is the one [`plan_library`] gives that speed,
+/// bit for bit, because it runs the same steps in the same order: the anchor's cold plan, then
+/// the walk from the anchor out to this speed (the part of [`plan_library`]'s walk that leads
+/// here), each solve from the previous one's optimum, then the check. It reads nothing another
+/// task wrote; the price is that it solves again the |index − anchor| speeds between the anchor
+/// and its own (the wall time of the longest task is that of [`plan_library`]'s longer walk).
+pub fn plan_speed(
+    model: &PlanarModel,
+    urdf_ref: &str,
+    urdf_text: &str,
+    config: &PlannerConfig,
+    speeds_mps: &[f64],
+    index: usize,
+    options: LibraryOptions,
+) -> Result<SpeedOutcome> {
+    let chains = Chains::new(config, speeds_mps)?;
+    let Some(&speed_mps) = speeds_mps.get(index) else {
+        return Err(PlannerError::InvalidSpeeds {
+            spec: format!("{speeds_mps:?}"),
+            reason: format!("speed index {index}: the list has {}", speeds_mps.len()),
+        });
+    };
+    let job = Job {
+        model,
+        urdf_ref,
+        urdf_text,
+        config,
+        speeds_mps,
+    };
+    let solved = match (&chains.refused[index], chains.anchor) {
+        (Some(reason), _) => Err(reason.clone()),
+        (None, None) => Err("not planned".to_string()),
+        (None, Some(anchor)) => {
+            let first = job.solve_cold(anchor);
+            if index == anchor {
+                first.map_err(|e| e.to_string())
+            } else {
+                let seed = first.as_ref().ok().map(|s| s.x.clone());
+                let walk = chains.walk_to(index);
+                let pool = worker_pool()?;
+                let mut done = pool.install(|| job.walk(walk, &seed));
+                match done.pop() {
+                    Some((i, r)) if i == index => r,
+                    _ => Err("not planned".to_string()),
+                }
+            }
+        }
+    };
+    let pool = worker_pool()?;
+    Ok(pool.install(|| check_speed(model, speed_mps, Some(solved), options)))
+}
+
+/// The order of a library's solves: the speeds the config refuses (left out before any solve),
+/// the anchor (the middle one of the others, planned cold) and the two walks outwards from it,
+/// each speed warm-started from the one before it in its walk.
+struct Chains {
+    /// Per speed, why the config refuses it (no step within its bounds reaches it).
+    refused: Vec<Option<String>>,
+    /// The middle speed of those planned.
+    anchor: Option<usize>,
+    /// The slower speeds, from the anchor down.
+    down: Vec<usize>,
+    /// The faster speeds, from the anchor up.
+    up: Vec<usize>,
+}
+
+impl Chains {
+    /// The chains of `speeds_mps` under `config` (checked: a valid config, increasing speeds).
+    fn new(config: &PlannerConfig, speeds_mps: &[f64]) -> Result<Self> {
+        config.validate("planner config")?;
+        for w in speeds_mps.windows(2) {
+            if w[1] <= w[0] {
+                return Err(PlannerError::InvalidSpeeds {
+                    spec: format!("{speeds_mps:?}"),
+                    reason: format!("{} after {}: speeds must increase", w[1], w[0]),
+                });
+            }
+        }
+        let refused: Vec<Option<String>> = speeds_mps
+            .iter()
+            .map(|&v| {
+                at_speed(config, v)
+                    .validate("planner config")
+                    .err()
+                    .map(|e| e.to_string())
+            })
+            .collect();
+        let open: Vec<usize> = (0..speeds_mps.len())
+            .filter(|&i| refused[i].is_none())
+            .collect();
+        let anchor = open.get(open.len() / 2).copied();
+        let (down, up) = match anchor {
+            Some(a) => (
+                open.iter().copied().filter(|&i| i < a).rev().collect(),
+                open.iter().copied().filter(|&i| i > a).collect(),
+            ),
+            None => (Vec::new(), Vec::new()),
+        };
+        Ok(Self {
+            refused,
+            anchor,
+            down,
+            up,
+        })
+    }
+
+    /// The walk from the anchor to speed `index`, `index` last (empty for the anchor and for
+    /// a refused speed).
+    fn walk_to(&self, index: usize) -> &[usize] {
+        for walk in [&self.down, &self.up] {
+            if let Some(k) = walk.iter().position(|&i| i == index) {
+                return &walk[..=k];
+            }
+        }
+        &[]
+    }
+}
+
+/// What every solve of a library shares.
+struct Job<'a> {
+    model: &'a PlanarModel,
+    urdf_ref: &'a str,
+    urdf_text: &'a str,
+    config: &'a PlannerConfig,
+    speeds_mps: &'a [f64],
+}
+
+impl Job<'_> {
+    /// The paper's two-step plan of speed `index`.
+    fn solve_cold(&self, index: usize) -> Result<Solved> {
+        solve_cold(
+            self.model,
+            self.urdf_ref,
+            self.urdf_text,
+            self.config,
+            self.speeds_mps[index],
+        )
+    }
+
+    /// The speeds of `order`, one after the other, each from the last optimum (the first from
+    /// `seed`, the anchor's).
+    fn walk(
+        &self,
+        order: &[usize],
+        seed: &Option<Vec<f64>>,
+    ) -> Vec<(usize, std::result::Result<Solved, String>)> {
+        let mut from = seed.clone();
+        order
+            .iter()
+            .map(|&i| {
+                let r = solve_speed(
+                    self.model,
+                    self.urdf_ref,
+                    self.urdf_text,
+                    self.config,
+                    self.speeds_mps[i],
+                    &from,
+                );
+                if let Ok(s) = &r {
+                    from = Some(s.x.clone());
+                }
+                (i, r.map_err(|e| e.to_string()))
+            })
+            .collect()
+    }
+}
+
+/// Whole solves run on the workers: a pool of its own with the stack of a main thread (a
+/// solve overflowed a 2 MiB test-thread stack), as the co-design landscape does.
+fn worker_pool() -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .stack_size(WORKER_STACK_BYTES)
+        .build()
+        .map_err(|e| PlannerError::Solver(format!("the library's thread pool: {e}")))
+}
+
 /// Stack of the library's workers, bytes (a main thread's).
 const WORKER_STACK_BYTES: usize = 8 << 20;
 
-fn robot_reference(model: &PlanarModel, urdf_ref: &str, urdf_text: &str) -> RobotReference {
+/// The robot a library names: the model's name, its URDF as `urdf_ref` (relative to the
+/// library file) and the SHA-256 of `urdf_text`.
+pub fn robot_reference(model: &PlanarModel, urdf_ref: &str, urdf_text: &str) -> RobotReference {
     RobotReference {
         name: model.name.clone(),
         urdf: urdf_ref.to_string(),
@@ -563,6 +715,37 @@ mod tests {
                 assert!(e.contains(w), "{spec}: {w}: {e}");
             }
         }
+    }
+
+    /// The walks go out from the middle open speed, one speed at a time; the walk to a speed
+    /// is the prefix of its walk that ends there; a refused speed has none.
+    #[test]
+    fn the_walk_to_a_speed_is_the_prefix_of_its_chain_from_the_anchor() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../configs/planner/adam_library.toml"
+        );
+        let config = PlannerConfig::load(path).expect("shipped config");
+        let speeds = parse_speeds("0.15:0.35:0.025").expect("speeds");
+        let chains = Chains::new(&config, &speeds).expect("chains");
+        assert!(chains.refused.iter().all(Option::is_none));
+        assert_eq!(chains.anchor, Some(4));
+        assert_eq!(chains.down, vec![3, 2, 1, 0]);
+        assert_eq!(chains.up, vec![5, 6, 7, 8]);
+        assert_eq!(chains.walk_to(4), &[] as &[usize]);
+        assert_eq!(chains.walk_to(1), &[3, 2, 1]);
+        assert_eq!(chains.walk_to(8), &[5, 6, 7, 8]);
+        // A speed no step within the bounds reaches is refused and has no walk; the anchor is
+        // the middle of the others.
+        let chains = Chains::new(&config, &[0.01, 0.2, 0.25, 0.3]).expect("chains");
+        assert!(chains.refused[0].is_some());
+        assert_eq!(chains.anchor, Some(2));
+        assert_eq!(chains.walk_to(0), &[] as &[usize]);
+        assert_eq!(chains.walk_to(1), &[1]);
+        let e = Chains::new(&config, &[0.3, 0.2])
+            .err()
+            .expect("decreasing speeds");
+        assert!(e.to_string().contains("0.2 after 0.3"), "{e}");
     }
 
     fn outcome(speed_mps: f64, ok: bool) -> SpeedOutcome {

@@ -156,6 +156,125 @@ pub fn landscape_point(
     initial_point(config, initial, lengths_m).0
 }
 
+/// A grid point solved from its inner neighbour's solution `from` (its point and
+/// multipliers), or from the initial gait when there is none or that solve fails: one step of
+/// the `neighbours` start, the same in [`landscape`] and in [`landscape_point_from_neighbours`].
+fn neighbour_step(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    lengths_m: [f64; 2],
+    from: Option<&WarmStart>,
+) -> (LandscapePoint, Option<WarmStart>) {
+    let tried = from.and_then(|w| {
+        let x0 = w.x.as_deref()?;
+        solve_point(config, lengths_m, x0, Some(w)).ok()
+    });
+    match tried {
+        Some((o, w)) => (
+            LandscapePoint {
+                lengths_m,
+                outcome: Ok(o),
+                from_neighbour: true,
+            },
+            Some(w),
+        ),
+        None => initial_point(config, initial, lengths_m),
+    }
+}
+
+/// The `neighbours` start's order on an n × n grid: the seed (the grid point nearest the
+/// initial design `model_lengths`), each point's ring (Chebyshev distance to the seed), and
+/// the inner neighbour each point starts from.
+struct Rings {
+    n: usize,
+    seed: (usize, usize),
+}
+
+impl Rings {
+    fn new(n: usize, thigh_m: &[f64], shin_m: &[f64], model_lengths: [f64; 2]) -> Self {
+        let nearest = |v: f64, grid: &[f64]| {
+            (0..n)
+                .min_by(|&a, &b| (grid[a] - v).abs().total_cmp(&(grid[b] - v).abs()))
+                .unwrap_or(0)
+        };
+        Self {
+            n,
+            seed: (
+                nearest(model_lengths[0], thigh_m),
+                nearest(model_lengths[1], shin_m),
+            ),
+        }
+    }
+
+    fn ring_of(&self, (i, j): (usize, usize)) -> usize {
+        i.abs_diff(self.seed.0).max(j.abs_diff(self.seed.1))
+    }
+
+    /// The neighbour one ring in that (i, j) starts from.
+    fn inner(&self, (i, j): (usize, usize)) -> (usize, usize) {
+        let toward = |v: usize, s: usize| match v.cmp(&s) {
+            std::cmp::Ordering::Less => v + 1,
+            std::cmp::Ordering::Equal => v,
+            std::cmp::Ordering::Greater => v - 1,
+        };
+        (toward(i, self.seed.0), toward(j, self.seed.1))
+    }
+
+    /// The points of `ring`, thigh-major.
+    fn members(&self, ring: usize) -> Vec<(usize, usize)> {
+        let n = self.n;
+        (0..n * n)
+            .map(|k| (k / n, k % n))
+            .filter(|&p| self.ring_of(p) == ring)
+            .collect()
+    }
+
+    /// The points from the seed's ring-1 neighbour out to `p` (p last; empty for the seed).
+    fn path_to(&self, p: (usize, usize)) -> Vec<(usize, usize)> {
+        let mut path = Vec::new();
+        let mut at = p;
+        while at != self.seed {
+            path.push(at);
+            at = self.inner(at);
+        }
+        path.reverse();
+        path
+    }
+}
+
+/// One point of the landscape started from its neighbours (the `neighbours` start,
+/// [`LandscapeStart`]) as an independent task (`adam sweep task` of a landscape plan): the
+/// point at index `k` (thigh-major) of the n × n grid, as [`landscape`] finds it, bit for bit.
+/// It takes the same steps: the seed from the initial gait, then each point of the chain of
+/// inner neighbours from the seed out to this one, from the last one's solution (or, if that
+/// fails, from the initial gait). It reads nothing another task wrote; the price is that it
+/// solves again the chain's points inside it (at most n − 1). Run it on a rayon worker, as
+/// [`landscape`] runs its points.
+pub fn landscape_point_from_neighbours(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    model_lengths: [f64; 2],
+    n: usize,
+    k: usize,
+) -> Result<LandscapePoint> {
+    check_landscape_grid(n, "a landscape point", "grid")?;
+    if k >= n * n {
+        return Err(crate::PlannerError::Solver(format!(
+            "landscape point {k}: the {n} × {n} grid has {} points",
+            n * n
+        )));
+    }
+    let c = &config.codesign;
+    let (thigh_m, shin_m) = (grid_values(c.thigh_m, n), grid_values(c.shin_m, n));
+    let at = |(i, j): (usize, usize)| [thigh_m[i], shin_m[j]];
+    let rings = Rings::new(n, &thigh_m, &shin_m, model_lengths);
+    let (mut point, mut warm) = initial_point(config, initial, at(rings.seed));
+    for p in rings.path_to((k / n, k % n)) {
+        (point, warm) = neighbour_step(config, initial, at(p), warm.as_ref());
+    }
+    Ok(point)
+}
+
 /// The grid values of a range: n points from its lower to its upper end (n ≥ 2).
 pub fn grid_values([a, b]: [f64; 2], n: usize) -> Vec<f64> {
     (0..n)
@@ -202,51 +321,21 @@ pub fn landscape(
             points = solved.into_iter().map(Some).collect();
         }
         LandscapeStart::Neighbours => {
-            let nearest = |v: f64, grid: &[f64]| {
-                (0..n)
-                    .min_by(|&a, &b| (grid[a] - v).abs().total_cmp(&(grid[b] - v).abs()))
-                    .unwrap_or(0)
-            };
-            let seed = (
-                nearest(model_lengths[0], &thigh_m),
-                nearest(model_lengths[1], &shin_m),
-            );
+            let rings = Rings::new(n, &thigh_m, &shin_m, model_lengths);
+            let seed = rings.seed;
             let mut warm: Vec<Option<WarmStart>> = vec![None; n * n];
             let (p, w) = from_initial(seed.0, seed.1);
             points[seed.0 * n + seed.1] = Some(p);
             warm[seed.0 * n + seed.1] = w;
-            let ring_of = |i: usize, j: usize| i.abs_diff(seed.0).max(j.abs_diff(seed.1));
-            let toward = |v: usize, s: usize| match v.cmp(&s) {
-                std::cmp::Ordering::Less => v + 1,
-                std::cmp::Ordering::Equal => v,
-                std::cmp::Ordering::Greater => v - 1,
-            };
             for ring in 1..n {
-                let members: Vec<(usize, usize)> = (0..n * n)
-                    .map(|k| (k / n, k % n))
-                    .filter(|&(i, j)| ring_of(i, j) == ring)
-                    .collect();
-                let solved: Vec<(usize, LandscapePoint, Option<WarmStart>)> = members
+                let solved: Vec<(usize, LandscapePoint, Option<WarmStart>)> = rings
+                    .members(ring)
                     .par_iter()
                     .map(|&(i, j)| {
-                        let src = toward(i, seed.0) * n + toward(j, seed.1);
-                        let neighbour = warm[src].as_ref();
-                        let tried = neighbour.and_then(|w| {
-                            let x0 = w.x.as_deref()?;
-                            solve_point(config, at(i, j), x0, Some(w)).ok()
-                        });
-                        let (p, w) = match tried {
-                            Some((o, w)) => {
-                                let p = LandscapePoint {
-                                    lengths_m: at(i, j),
-                                    outcome: Ok(o),
-                                    from_neighbour: true,
-                                };
-                                on_done(&p);
-                                (p, Some(w))
-                            }
-                            None => from_initial(i, j),
-                        };
+                        let (si, sj) = rings.inner((i, j));
+                        let (p, w) =
+                            neighbour_step(config, initial, at(i, j), warm[si * n + sj].as_ref());
+                        on_done(&p);
                         (i * n + j, p, w)
                     })
                     .collect();
@@ -275,4 +364,39 @@ pub fn landscape(
         points,
         wall_time_s: t0.elapsed().as_secs_f64(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every point's chain starts one ring out from the seed, steps one ring out each time,
+    /// each point from its inner neighbour, and ends at the point: the order the ring-by-ring
+    /// loop solves them in, so a task that walks it sees what the loop saw.
+    #[test]
+    fn the_chain_to_a_point_is_the_rings_inner_neighbours_from_the_seed() {
+        for (n, model) in [(9, [0.24, 0.25]), (4, [0.15, 0.35]), (2, [0.3, 0.2])] {
+            let grid = grid_values([0.15, 0.35], n);
+            let rings = Rings::new(n, &grid, &grid, model);
+            assert_eq!(rings.path_to(rings.seed), Vec::new());
+            let mut counted = 1;
+            for ring in 1..n {
+                for p in rings.members(ring) {
+                    counted += 1;
+                    let path = rings.path_to(p);
+                    assert_eq!(path.len(), ring, "{p:?}: {path:?}");
+                    assert_eq!(path.last(), Some(&p));
+                    assert_eq!(rings.inner(path[0]), rings.seed);
+                    for (k, w) in path.windows(2).enumerate() {
+                        assert_eq!(rings.inner(w[1]), w[0], "{p:?}: {path:?}");
+                        assert_eq!(rings.ring_of(w[0]), k + 1);
+                    }
+                }
+            }
+            assert_eq!(counted, n * n, "the rings cover the grid once");
+        }
+        // The shipped 9 × 9 grid is seeded at its centre (0.25, 0.25 m for 0.24, 0.25 m).
+        let grid = grid_values([0.15, 0.35], 9);
+        assert_eq!(Rings::new(9, &grid, &grid, [0.24, 0.25]).seed, (4, 4));
+    }
 }

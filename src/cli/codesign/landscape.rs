@@ -10,8 +10,12 @@ use planner::codesign::{Landscape, LandscapeStart};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// `--start` of the landscape (no doc on the values: clap would list them with it).
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+/// `--start` of the landscape (no doc on the values: clap would list them with it); also the
+/// start of a landscape sweep plan.
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
 pub(crate) enum StartArg {
     Initial,
     Neighbours,
@@ -27,6 +31,52 @@ pub(crate) struct LandscapeRequest<'a> {
     pub(crate) sweep: Option<&'a Path>,
     /// `--start`.
     pub(crate) start: StartArg,
+}
+
+impl StartArg {
+    /// The planner's start.
+    pub(crate) fn start(self) -> LandscapeStart {
+        match self {
+            StartArg::Initial => LandscapeStart::Initial,
+            StartArg::Neighbours => LandscapeStart::Neighbours,
+        }
+    }
+}
+
+/// The co-design optimum the landscape draws and reports, with the constraints that hold it:
+/// what `adam codesign landscape` takes from its co-design run, and a landscape sweep's
+/// optimum task writes as JSON.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct OptimumSummary {
+    /// Thigh and shin length of the optimum, m.
+    pub(crate) lengths_m: [f64; 2],
+    /// Its gait's step length, m.
+    pub(crate) step_length_m: f64,
+    /// Its gait's step duration, s.
+    pub(crate) step_duration_s: f64,
+    /// Its gait's speed, m/s.
+    pub(crate) speed_mps: f64,
+    /// Its gait's mechanical cost of transport.
+    pub(crate) cost_of_transport: f64,
+    /// The co-design objective and the table of active constraints with their multipliers
+    /// (`planner::codesign::Activity` as text); none if the last solve did not end usable.
+    pub(crate) activity: Option<(f64, String)>,
+}
+
+impl OptimumSummary {
+    /// The summary of a co-design run.
+    pub(crate) fn of(co: &planner::codesign::CodesignResult) -> Self {
+        let g = &co.planned.gait;
+        Self {
+            lengths_m: [co.design.thigh_length_m, co.design.shin_length_m],
+            step_length_m: g.step_length_m,
+            step_duration_s: g.step_duration_s,
+            speed_mps: g.speed_mps,
+            cost_of_transport: g.cost_of_transport,
+            activity: co.activity.as_ref().map(|a| (a.cost, a.to_string())),
+        }
+    }
 }
 
 /// The landscape's outputs in its folder.
@@ -66,12 +116,14 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
     let initial = warm_start(&cfg)?;
     let warm_s = t0.elapsed().as_secs_f64();
     let bar = progress(n * n, "fixed-design solves")?;
-    let start = match request.start {
-        StartArg::Initial => LandscapeStart::Initial,
-        StartArg::Neighbours => LandscapeStart::Neighbours,
-    };
-    let land =
-        planner::codesign::landscape(&cfg, &initial, model_lengths, n, start, &|_| bar.inc(1))?;
+    let land = planner::codesign::landscape(
+        &cfg,
+        &initial,
+        model_lengths,
+        n,
+        request.start.start(),
+        &|_| bar.inc(1),
+    )?;
     bar.finish();
     println!("co-design from the initial design, for the optimum and its multipliers ...");
     let t1 = std::time::Instant::now();
@@ -90,66 +142,25 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
                 planner::codesign::sweep(&cfg, &initial, model_lengths, &starts, &|_| bar.inc(1));
             bar.finish();
             planner::codesign::save_sweep(&out_dir.join("sweep.json"), &runs)?;
-            runs.iter()
-                .filter_map(|r| r.outcome.as_ref().ok())
-                .map(|o| (o.lengths_m[0], o.lengths_m[1]))
-                .collect()
+            sweep_ends(&runs)
         }
     };
     let sweep_s = t2.elapsed().as_secs_f64();
-    let optimum = [co.design.thigh_length_m, co.design.shin_length_m];
-    let mut md = String::new();
-    writeln!(
-        md,
-        "# Cost landscape ({n} × {n} fixed designs, {} start)\n",
-        match request.start {
-            StartArg::Initial => "initial-gait",
-            StartArg::Neighbours => "neighbour",
-        }
-    )?;
-    md.push_str(&write_grid_report(
+    let md = write_landscape_report(
         &cfg,
         &land,
+        request.start,
         out_dir,
-        Some((optimum[0], optimum[1])),
+        Some(&OptimumSummary::of(&co)),
         &ends,
-    )?);
-    let fixed_s = land.wall_time_s;
-    let g = &co.planned.gait;
-    writeln!(
-        md,
-        "## Co-design optimum ({} coupling): thigh {:.4} m, shin {:.4} m\n\nstep {:.4} m in {:.4} s ({:.4} m/s), cost of transport {:.5}; {} convergence-study endpoints drawn.\n",
-        super::report::coupling_name(cfg.codesign.inertia),
-        optimum[0],
-        optimum[1],
-        g.step_length_m,
-        g.step_duration_s,
-        g.speed_mps,
-        g.cost_of_transport,
-        ends.len()
     )?;
-    match &co.activity {
-        Some(a) => writeln!(
-            md,
-            "Active constraints at the optimum, with the cost they hold it at (the co-design \
-             objective {:.5}; relief = cost saved per unit a group's active bounds move \
-             outward, from the interior point's multipliers):\n\n{a}",
-            a.cost
-        )?,
-        None => writeln!(
-            md,
-            "The last co-design solve did not end usable: no multipliers."
-        )?,
-    }
-    writeln!(
-        md,
-        "\nTimes: warm start {warm_s:.2} s, {} fixed-design solves {fixed_s:.2} s wall, co-design {codesign_s:.2} s, sweep {sweep_s:.2} s; {} threads.",
-        n * n,
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    )?;
-    let md_path = out_dir.join("activity.md");
-    std::fs::write(&md_path, &md).with_context(|| format!("writing {}", md_path.display()))?;
     print!("\n{md}");
+    println!(
+        "\nTimes: warm start {warm_s:.2} s, {} fixed-design solves {:.2} s wall, co-design {codesign_s:.2} s, sweep {sweep_s:.2} s; {} threads.",
+        n * n,
+        land.wall_time_s,
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    );
     println!(
         "wrote {0}/landscape.png, {0}/landscape.svg, {0}/landscape.csv and {0}/activity.md{1}",
         out_dir.display(),
@@ -160,6 +171,77 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
         }
     );
     Ok(())
+}
+
+/// The endpoints of the convergence study's runs that converged, m.
+pub(crate) fn sweep_ends(runs: &[planner::codesign::SweepRun]) -> Vec<(f64, f64)> {
+    runs.iter()
+        .filter_map(|r| r.outcome.as_ref().ok())
+        .map(|o| (o.lengths_m[0], o.lengths_m[1]))
+        .collect()
+}
+
+/// The whole landscape report, the same from `adam codesign landscape` and from `adam sweep
+/// collect` of a landscape plan: the grid's part ([`write_grid_report`]) and the co-design
+/// optimum with its active constraints, written to `activity.md` (no times: those are printed)
+/// and returned.
+pub(crate) fn write_landscape_report(
+    cfg: &planner::config::PlannerConfig,
+    land: &Landscape,
+    start: StartArg,
+    out_dir: &Path,
+    optimum: Option<&OptimumSummary>,
+    ends: &[(f64, f64)],
+) -> Result<String> {
+    let n = land.n;
+    let mut md = String::new();
+    writeln!(
+        md,
+        "# Cost landscape ({n} × {n} fixed designs, {} start)\n",
+        match start {
+            StartArg::Initial => "initial-gait",
+            StartArg::Neighbours => "neighbour",
+        }
+    )?;
+    md.push_str(&write_grid_report(
+        cfg,
+        land,
+        out_dir,
+        optimum.map(|o| (o.lengths_m[0], o.lengths_m[1])),
+        ends,
+    )?);
+    match optimum {
+        None => writeln!(md, "## Co-design optimum: no result\n")?,
+        Some(o) => {
+            writeln!(
+                md,
+                "## Co-design optimum ({} coupling): thigh {:.4} m, shin {:.4} m\n\nstep {:.4} m in {:.4} s ({:.4} m/s), cost of transport {:.5}; {} convergence-study endpoints drawn.\n",
+                super::report::coupling_name(cfg.codesign.inertia),
+                o.lengths_m[0],
+                o.lengths_m[1],
+                o.step_length_m,
+                o.step_duration_s,
+                o.speed_mps,
+                o.cost_of_transport,
+                ends.len()
+            )?;
+            match &o.activity {
+                Some((cost, table)) => writeln!(
+                    md,
+                    "Active constraints at the optimum, with the cost they hold it at (the co-design \
+                     objective {cost:.5}; relief = cost saved per unit a group's active bounds move \
+                     outward, from the interior point's multipliers):\n\n{table}"
+                )?,
+                None => writeln!(
+                    md,
+                    "The last co-design solve did not end usable: no multipliers."
+                )?,
+            }
+        }
+    }
+    let md_path = out_dir.join("activity.md");
+    std::fs::write(&md_path, &md).with_context(|| format!("writing {}", md_path.display()))?;
+    Ok(md)
 }
 
 /// The grid's part of the landscape's report, the same from `adam codesign landscape` and from

@@ -10,7 +10,9 @@ mod sweep;
 pub(crate) use sweep::write_sweep_report;
 
 pub(crate) use audit::audit;
-pub(crate) use landscape::{landscape, write_grid_report, LandscapeRequest, StartArg};
+pub(crate) use landscape::{
+    landscape, sweep_ends, write_landscape_report, LandscapeRequest, OptimumSummary, StartArg,
+};
 
 use crate::cli::paths::{relative_path, writable, OUT_DIR};
 use crate::cli::plan::{gait_check, progress_printer};

@@ -12,14 +12,20 @@ use std::path::PathBuf;
 /// The speeds the shipped library covers (issue #29: the treadmill's 0.15–0.35 m/s).
 pub(crate) const DEFAULT_SPEEDS: &str = "0.15:0.35:0.025";
 
+/// The robot of a library by default: the one `adam demo` walks.
+pub(crate) const DEFAULT_ROBOT: &str = "configs/robots/adam_codesign.urdf";
+
+/// The planner config of a library by default.
+pub(crate) const DEFAULT_CONFIG: &str = "configs/planner/adam_library.toml";
+
 /// Arguments of `adam plan library`.
 #[derive(clap::Args, Clone)]
 pub(crate) struct LibraryArgs {
     /// Robot URDF (the design is fixed: the URDF's); default the robot `adam demo` walks.
-    #[arg(long, default_value = "configs/robots/adam_codesign.urdf")]
+    #[arg(long, default_value = DEFAULT_ROBOT)]
     pub(crate) robot: PathBuf,
     /// Planner config (TOML); its `gait.speed_mps` is replaced by each speed.
-    #[arg(long, default_value = "configs/planner/adam_library.toml")]
+    #[arg(long, default_value = DEFAULT_CONFIG)]
     pub(crate) config: PathBuf,
     /// Speeds, m/s: `lo:hi:step` or a list `v1,v2,…` (slowest first).
     #[arg(long, default_value = DEFAULT_SPEEDS)]
@@ -137,53 +143,69 @@ pub(crate) fn plan_library(args: &LibraryArgs) -> Result<()> {
     Ok(())
 }
 
-/// The table of a library run: one row per speed, the left-out ones with their reason.
+/// The table of a library run: one row per speed, the left-out ones with their reason, each
+/// speed's solve time and the wall time.
 pub(crate) struct LibraryTable<'a>(pub(crate) &'a LibraryPlan);
 
 impl fmt::Display for LibraryTable<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "{:>7} {:>8} {:>7} {:>9} {:>8} {:>9} {:>9} {:>5} {:>5} {:>8}",
-            "v m/s",
-            "d m",
-            "T s",
-            "CoT",
-            "max|λ|",
-            "T err %",
-            "d err %",
-            "start",
-            "iter",
-            "solve s"
-        )?;
-        for o in &self.0.outcomes {
-            match &o.result {
-                Ok(e) => {
-                    let g = &e.gait;
-                    writeln!(
-                        f,
-                        "{:>7.3} {:>8.4} {:>7.4} {:>9.5} {:>8.4} {:>9.3} {:>9.3} {:>5} {:>5} {:>8.2}",
-                        o.speed_mps,
-                        g.step_length_m,
-                        g.step_duration_s,
-                        g.cost_of_transport,
-                        e.check.spectral_radius,
-                        100.0 * e.check.duration_error(g),
-                        100.0 * e.check.length_error(g),
-                        if o.warm { "warm" } else { "cold" },
-                        o.iterations,
-                        o.solve_time_s
-                    )?;
-                }
-                Err(why) => writeln!(f, "{:>7.3} left out: {why}", o.speed_mps)?,
-            }
-        }
-        let solve: f64 = self.0.outcomes.iter().map(|o| o.solve_time_s).sum();
-        let verify: f64 = self.0.outcomes.iter().map(|o| o.verify_time_s).sum();
-        write!(
-            f,
-            "wall {:.2} s (solves {solve:.2} s, verification and feed-forward {verify:.2} s, summed over speeds)",
-            self.0.wall_time_s
-        )
+        write_table(f, self.0, true)
     }
+}
+
+/// [`LibraryTable`] without times: what a library run found, the same from `adam plan library`
+/// and from a library sweep's tasks (`adam sweep collect` writes it to `library.md`).
+pub(crate) struct LibraryFigures<'a>(pub(crate) &'a LibraryPlan);
+
+impl fmt::Display for LibraryFigures<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write_table(f, self.0, false)
+    }
+}
+
+fn write_table(f: &mut fmt::Formatter<'_>, plan: &LibraryPlan, times: bool) -> fmt::Result {
+    write!(
+        f,
+        "{:>7} {:>8} {:>7} {:>9} {:>8} {:>9} {:>9} {:>5} {:>5}",
+        "v m/s", "d m", "T s", "CoT", "max|λ|", "T err %", "d err %", "start", "iter"
+    )?;
+    if times {
+        write!(f, " {:>8}", "solve s")?;
+    }
+    writeln!(f)?;
+    for o in &plan.outcomes {
+        match &o.result {
+            Ok(e) => {
+                let g = &e.gait;
+                write!(
+                    f,
+                    "{:>7.3} {:>8.4} {:>7.4} {:>9.5} {:>8.4} {:>9.3} {:>9.3} {:>5} {:>5}",
+                    o.speed_mps,
+                    g.step_length_m,
+                    g.step_duration_s,
+                    g.cost_of_transport,
+                    e.check.spectral_radius,
+                    100.0 * e.check.duration_error(g),
+                    100.0 * e.check.length_error(g),
+                    if o.warm { "warm" } else { "cold" },
+                    o.iterations,
+                )?;
+                if times {
+                    write!(f, " {:>8.2}", o.solve_time_s)?;
+                }
+                writeln!(f)?;
+            }
+            Err(why) => writeln!(f, "{:>7.3} left out: {why}", o.speed_mps)?,
+        }
+    }
+    if !times {
+        return Ok(());
+    }
+    let solve: f64 = plan.outcomes.iter().map(|o| o.solve_time_s).sum();
+    let verify: f64 = plan.outcomes.iter().map(|o| o.verify_time_s).sum();
+    write!(
+        f,
+        "wall {:.2} s (solves {solve:.2} s, verification and feed-forward {verify:.2} s, summed over speeds)",
+        plan.wall_time_s
+    )
 }

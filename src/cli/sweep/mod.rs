@@ -16,11 +16,13 @@
 //! and the planner may not depend on it.
 
 mod design;
+mod library;
 mod plan;
 mod result;
 mod slurm;
 mod treadmill;
 
+use crate::cli::codesign::StartArg;
 use crate::cli::paths::writable;
 use anyhow::{bail, Context, Result};
 use plan::{Input, Resources, Study, SweepPlan, PLAN_SCHEMA_VERSION};
@@ -32,7 +34,7 @@ use std::path::{Path, PathBuf};
 pub(crate) enum SweepCommand {
     /// Write a sweep plan: the study, its inputs with their SHA-256, the output folder, time
     /// and memory per task, and every task with its index.
-    Plan(PlanArgs),
+    Plan(Box<PlanArgs>),
     /// Run one task of a plan and write its result file (atomically: a temporary file, then a
     /// rename). The index defaults to `$SLURM_ARRAY_TASK_ID`.
     Task {
@@ -67,19 +69,37 @@ pub(crate) enum SweepCommand {
 pub(crate) struct PlanArgs {
     /// The study: `codesign` (a co-design per initial design of an n × n grid), `landscape`
     /// (the fixed-design gait at every point of an n × n grid), `treadmill` (the treadmill
-    /// matrix: belt speeds, belt steps, pushes, restarts × seeds), `library` (not yet).
+    /// matrix: belt speeds, belt steps, pushes, restarts × seeds), `library` (a gait per speed,
+    /// as `adam plan library`).
     #[arg(long, value_enum)]
     study: Study,
     /// Grid size n (n × n tasks) of `codesign` and `landscape` (default: the config's
     /// `[codesign.sweep] grid`, `[codesign] landscape_grid`).
     #[arg(long)]
     grid: Option<usize>,
-    /// Planner config (`codesign`, `landscape`).
-    #[arg(long, default_value = "configs/planner/adam.toml")]
-    config: PathBuf,
+    /// Planner config (`codesign`, `landscape`: default configs/planner/adam.toml; `library`:
+    /// configs/planner/adam_library.toml).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Robot URDF of `library` (default: the robot of `adam plan library`).
+    #[arg(long)]
+    robot: Option<PathBuf>,
+    /// Speeds of `library`, m/s: `lo:hi:step` or `v1,v2,…` (default: those of `adam plan
+    /// library`).
+    #[arg(long)]
+    speeds: Option<String>,
+    /// `library`: largest relative difference between the verified and the planned step for a
+    /// gait to enter the library (default: the 1 % plan accuracy).
+    #[arg(long)]
+    max_step_error: Option<f64>,
     /// Inertia coupling of `codesign` and `landscape`, overriding the config.
     #[arg(long, value_enum)]
     inertia: Option<crate::cli::codesign::InertiaArg>,
+    /// Where each `landscape` grid solve starts, as `adam codesign landscape --start`:
+    /// `neighbours` (the default: from its inner neighbour's solution, the chain from the
+    /// initial design solved again in each task) or `initial` (the initial gait).
+    #[arg(long, value_enum)]
+    start: Option<StartArg>,
     /// Runtime config (`treadmill`).
     #[arg(long, default_value = crate::cli::shipped::RUNTIME_CONFIG)]
     runtime_config: PathBuf,
@@ -122,14 +142,58 @@ pub(crate) fn sweep(command: SweepCommand) -> Result<()> {
     }
 }
 
-/// Why `--study library` is refused.
-const LIBRARY_NOT_YET: &str = "--study library: not a sweep study yet: `adam plan library` warm-starts each speed's gait from its neighbour's, so its gaits are not independent tasks (use `adam plan library`)";
+/// The planner config of the design studies by default.
+const DESIGN_CONFIG: &str = "configs/planner/adam.toml";
+
+/// Refuses the flags of another study than `--study`'s, naming them.
+fn refuse_other_studies_flags(args: &PlanArgs) -> Result<()> {
+    let given = |on: bool, flag: &'static str| on.then_some(flag);
+    let library_only = [
+        given(args.robot.is_some(), "--robot"),
+        given(args.speeds.is_some(), "--speeds"),
+        given(args.max_step_error.is_some(), "--max-step-error"),
+    ];
+    let start = given(args.start.is_some(), "--start");
+    let grid = given(args.grid.is_some(), "--grid");
+    let stray: Vec<&str> = match args.study {
+        Study::Library => vec![grid, given(args.inertia.is_some(), "--inertia"), start],
+        Study::Treadmill => {
+            let mut v = library_only.to_vec();
+            v.push(grid);
+            v.push(given(args.config.is_some(), "--config"));
+            v.push(given(args.inertia.is_some(), "--inertia"));
+            v.push(start);
+            v
+        }
+        Study::Codesign => {
+            let mut v = library_only.to_vec();
+            v.push(start);
+            v
+        }
+        Study::Landscape => library_only.to_vec(),
+    }
+    .into_iter()
+    .flatten()
+    .collect();
+    if !stray.is_empty() {
+        bail!(
+            "{}: not used by the {} study (its tasks: {})",
+            stray.join(", "),
+            args.study.name(),
+            match args.study {
+                Study::Codesign => "a co-design per start of --grid n × n",
+                Study::Landscape => "a fixed design per point of --grid n × n",
+                Study::Library => "a gait per speed of --speeds",
+                Study::Treadmill => "--seeds × the scenarios",
+            }
+        );
+    }
+    Ok(())
+}
 
 /// `adam sweep plan`.
 fn write_plan(args: &PlanArgs) -> Result<()> {
-    if args.study == Study::Library {
-        bail!(LIBRARY_NOT_YET);
-    }
+    refuse_other_studies_flags(args)?;
     writable(&args.out, args.force)?;
     let out_dir = args
         .out_dir
@@ -151,25 +215,28 @@ fn write_plan(args: &PlanArgs) -> Result<()> {
         inputs: Vec::new(),
         design: None,
         treadmill: None,
+        library: None,
         tasks: Vec::new(),
     };
     match args.study {
         Study::Codesign | Study::Landscape => {
-            let path = crate::cli::shipped::input(&args.config);
+            let config = args
+                .config
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(DESIGN_CONFIG));
+            let path = crate::cli::shipped::input(&config);
             let cfg = crate::cli::codesign::codesign_config(&path, args.inertia)?;
             let grid = args.grid.unwrap_or(match args.study {
                 Study::Landscape => cfg.codesign.landscape_grid,
                 _ => cfg.codesign.sweep.grid,
             });
-            let (design, tasks) = design::tasks(args.study, &cfg, grid)?;
+            let start = args.start.unwrap_or(StartArg::Neighbours);
+            let (design, tasks) = design::tasks(args.study, &cfg, grid, start)?;
             plan.inputs = vec![Input::hashed(design::PLANNER_CONFIG, &path)?];
             plan.design = Some(design);
             plan.tasks = tasks;
         }
         Study::Treadmill => {
-            if args.grid.is_some() {
-                bail!("--grid is not used by the treadmill study (its matrix is --seeds × the scenarios)");
-            }
             let (inputs, settings, tasks) = treadmill::plan(
                 &crate::cli::shipped::input(&args.runtime_config),
                 &crate::cli::shipped::input(&args.gait),
@@ -180,7 +247,31 @@ fn write_plan(args: &PlanArgs) -> Result<()> {
             plan.treadmill = Some(settings);
             plan.tasks = tasks;
         }
-        Study::Library => bail!(LIBRARY_NOT_YET),
+        Study::Library => {
+            let robot = args
+                .robot
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(crate::cli::plan::library::DEFAULT_ROBOT));
+            let config = args
+                .config
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(crate::cli::plan::library::DEFAULT_CONFIG));
+            let (inputs, settings, tasks) = library::plan(&library::LibraryRequest {
+                robot: &robot,
+                config: &config,
+                speeds: args
+                    .speeds
+                    .as_deref()
+                    .unwrap_or(crate::cli::plan::library::DEFAULT_SPEEDS),
+                max_step_error: args
+                    .max_step_error
+                    .unwrap_or(planner::verify::PLAN_ACCURACY),
+                out_dir: &plan.out_dir,
+            })?;
+            plan.inputs = inputs;
+            plan.library = Some(settings);
+            plan.tasks = tasks;
+        }
     }
     plan.task_count = plan.tasks.len();
     plan.validate(&args.out)?;
@@ -232,7 +323,7 @@ fn task(plan_path: &Path, index: Option<usize>) -> Result<()> {
     let payload = match plan.study {
         Study::Codesign | Study::Landscape => design::run_task(&plan, plan_path, &task)?,
         Study::Treadmill => treadmill::run_task(&plan, plan_path, &task)?,
-        Study::Library => bail!("{}: library plans are not supported", plan_path.display()),
+        Study::Library => library::run_task(&plan, plan_path, &task)?,
     };
     let failed = payload.error().map(str::to_string);
     let path = write_result(
@@ -331,7 +422,7 @@ fn collect(plan_path: &Path) -> Result<()> {
         Study::Codesign => design::collect_codesign(&plan, plan_path, &results)?,
         Study::Landscape => design::collect_landscape(&plan, plan_path, &results)?,
         Study::Treadmill => treadmill::collect(&plan, &results)?,
-        Study::Library => bail!("{}: library plans are not supported", plan_path.display()),
+        Study::Library => library::collect(&plan, plan_path, &results)?,
     };
     print!("{report}");
     let failed: Vec<(usize, &str)> = results

@@ -53,8 +53,8 @@ pub(crate) enum Study {
     Landscape,
     /// The treadmill robustness matrix: speeds, belt steps, pushes and restarts × seeds.
     Treadmill,
-    /// The gait library: a gait per speed (not yet a sweep study: its gaits are warm-started
-    /// one from the next).
+    /// The gait library: a task per speed, each the anchor's plan and the walk out to its
+    /// speed (`planner::library::plan_speed`).
     Library,
 }
 
@@ -142,6 +142,13 @@ pub(crate) struct DesignGrid {
     pub(crate) grid: usize,
     /// Inertia coupling: `exact` or `alg1`.
     pub(crate) inertia: planner::config::InertiaCoupling,
+    /// Landscape: where each grid solve starts (`neighbours`: the chain of inner neighbours
+    /// from the initial design, as `adam codesign landscape`; `initial`: the initial gait).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) start: Option<crate::cli::codesign::StartArg>,
+    /// Landscape: the grid size of the convergence study whose endpoints it draws.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) sweep_grid: Option<usize>,
 }
 
 /// The treadmill study's settings.
@@ -152,6 +159,20 @@ pub(crate) struct TreadmillSettings {
     pub(crate) seeds: Vec<u64>,
     /// The shorter set of `adam bench treadmill --quick`.
     pub(crate) quick: bool,
+}
+
+/// The gait-library study's settings (as `adam plan library` takes them).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LibrarySettings {
+    /// The speeds, m/s, slowest first: task k plans `speeds_mps[k]`.
+    pub(crate) speeds_mps: Vec<f64>,
+    /// Largest relative difference between the verified and the planned step for a gait to
+    /// enter the library (`adam plan library --max-step-error`).
+    pub(crate) max_step_error: f64,
+    /// The library file `adam sweep collect` writes (absolute; its robot is named relative to
+    /// it, as `adam plan library --out` names it).
+    pub(crate) library_file: PathBuf,
 }
 
 /// One task: its index and what it runs (the field of its study).
@@ -166,9 +187,16 @@ pub(crate) struct Task {
     /// Landscape: the fixed thigh and shin length, m.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) lengths_m: Option<[f64; 2]>,
+    /// Landscape: the co-design from this initial design (thigh, shin, m) for the optimum and
+    /// its multipliers.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) optimum_from_m: Option<[f64; 2]>,
     /// Treadmill: the run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) treadmill: Option<runtime::sim::matrix::Run>,
+    /// Gait library: the speed of the task's gait, m/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) speed_mps: Option<f64>,
 }
 
 /// A sweep plan.
@@ -195,6 +223,9 @@ pub(crate) struct SweepPlan {
     /// Treadmill settings.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(crate) treadmill: Option<TreadmillSettings>,
+    /// Gait-library settings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) library: Option<LibrarySettings>,
     /// Every task, index 0, 1, … in order.
     pub(crate) tasks: Vec<Task>,
 }
@@ -267,37 +298,87 @@ impl SweepPlan {
             }
             let has = match self.study {
                 Study::Codesign => t.initial_m.is_some(),
-                Study::Landscape => t.lengths_m.is_some(),
+                Study::Landscape => {
+                    t.lengths_m.is_some() || t.initial_m.is_some() || t.optimum_from_m.is_some()
+                }
                 Study::Treadmill => t.treadmill.is_some(),
-                Study::Library => false,
+                Study::Library => t.speed_mps.is_some(),
             };
             if !has {
                 let field = match self.study {
                     Study::Codesign => "initial_m",
-                    Study::Landscape => "lengths_m",
+                    Study::Landscape => "lengths_m', 'initial_m' or 'optimum_from_m",
                     Study::Treadmill => "treadmill",
-                    Study::Library => "(none: library plans are not supported yet)",
+                    Study::Library => "speed_mps",
                 };
                 bail!(
                     "{file}: field 'tasks[{k}]': a {} task needs '{field}'",
                     self.study.name()
                 );
             }
-            for v in t.initial_m.iter().chain(t.lengths_m.iter()).flatten() {
+            for v in t
+                .initial_m
+                .iter()
+                .chain(t.lengths_m.iter())
+                .chain(t.optimum_from_m.iter())
+                .flatten()
+            {
                 if !v.is_finite() || *v <= 0.0 {
                     bail!("{file}: field 'tasks[{k}]' = {v}: lengths must be positive numbers of metres");
                 }
             }
         }
-        match (self.study, &self.design, &self.treadmill) {
-            (Study::Codesign | Study::Landscape, None, _) => {
+        match (self.study, &self.design, &self.treadmill, &self.library) {
+            (Study::Codesign | Study::Landscape, None, _, _) => {
                 bail!(
                     "{file}: field 'design': a {} plan needs it",
                     self.study.name()
                 )
             }
-            (Study::Treadmill, _, None) => {
+            (Study::Treadmill, _, None, _) => {
                 bail!("{file}: field 'treadmill': a treadmill plan needs it")
+            }
+            (Study::Library, _, _, None) => {
+                bail!("{file}: field 'library': a library plan needs it")
+            }
+            (Study::Library, _, _, Some(lib)) => {
+                for (k, t) in self.tasks.iter().enumerate() {
+                    if t.speed_mps != lib.speeds_mps.get(k).copied() {
+                        bail!(
+                            "{file}: field 'tasks[{k}].speed_mps' = {:?}: task {k} plans the library's speed {k}, library.speeds_mps[{k}] = {:?}",
+                            t.speed_mps,
+                            lib.speeds_mps.get(k)
+                        );
+                    }
+                }
+                if lib.speeds_mps.len() != self.tasks.len() {
+                    bail!(
+                        "{file}: field 'library.speeds_mps': {} speeds for {} tasks (a task per speed)",
+                        lib.speeds_mps.len(),
+                        self.tasks.len()
+                    );
+                }
+                let mut last = 0.0;
+                for (k, &v) in lib.speeds_mps.iter().enumerate() {
+                    if !(v.is_finite() && v > last) {
+                        bail!(
+                            "{file}: field 'library.speeds_mps[{k}]' = {v}: speeds must be positive numbers of m/s, increasing"
+                        );
+                    }
+                    last = v;
+                }
+                if !(lib.max_step_error.is_finite() && lib.max_step_error > 0.0) {
+                    bail!(
+                        "{file}: field 'library.max_step_error' = {}: must be a positive fraction (0.01 = 1 %)",
+                        lib.max_step_error
+                    );
+                }
+                if !lib.library_file.is_absolute() {
+                    bail!(
+                        "{file}: field 'library.library_file' = \"{}\": must be an absolute path",
+                        lib.library_file.display()
+                    );
+                }
             }
             _ => {}
         }
@@ -370,15 +451,20 @@ mod tests {
             design: Some(DesignGrid {
                 grid: 2,
                 inertia: planner::config::InertiaCoupling::Exact,
+                start: None,
+                sweep_grid: None,
             }),
             treadmill: None,
+            library: None,
             tasks: (0..4)
                 .map(|index| Task {
                     index,
                     // Lengths that are not short decimals: the round trip must be exact.
                     initial_m: Some([0.15 + 0.2 / 3.0 * index as f64, 0.1 + 0.1f64.sqrt()]),
                     lengths_m: None,
+                    optimum_from_m: None,
                     treadmill: None,
+                    speed_mps: None,
                 })
                 .collect(),
         }
@@ -429,6 +515,93 @@ mod tests {
         );
     }
 
+    /// A library plan: a task per speed of its settings.
+    fn library_plan() -> SweepPlan {
+        let speeds = vec![0.2, 0.225, 0.25];
+        SweepPlan {
+            study: Study::Library,
+            task_count: speeds.len(),
+            design: None,
+            library: Some(LibrarySettings {
+                speeds_mps: speeds.clone(),
+                max_step_error: 0.01,
+                library_file: PathBuf::from("/tmp/sweep/adam_library.json"),
+            }),
+            tasks: speeds
+                .iter()
+                .enumerate()
+                .map(|(index, &v)| Task {
+                    index,
+                    initial_m: None,
+                    lengths_m: None,
+                    optimum_from_m: None,
+                    treadmill: None,
+                    speed_mps: Some(v),
+                })
+                .collect(),
+            ..plan()
+        }
+    }
+
+    #[test]
+    fn library_and_landscape_plans_round_trip_and_bad_library_settings_are_named() {
+        let p = library_plan();
+        let back = SweepPlan::parse(&p.to_toml().unwrap(), Path::new("l.toml")).unwrap();
+        assert_eq!(back, p);
+        let mut l = plan();
+        l.study = Study::Landscape;
+        l.design = Some(DesignGrid {
+            grid: 2,
+            inertia: planner::config::InertiaCoupling::Exact,
+            start: Some(crate::cli::codesign::StartArg::Neighbours),
+            sweep_grid: Some(2),
+        });
+        l.tasks[3] = Task {
+            index: 3,
+            initial_m: None,
+            lengths_m: None,
+            optimum_from_m: Some([0.24, 0.25]),
+            treadmill: None,
+            speed_mps: None,
+        };
+        let text = l.to_toml().unwrap();
+        assert!(text.contains("start = \"neighbours\""), "{text}");
+        assert_eq!(SweepPlan::parse(&text, Path::new("l.toml")).unwrap(), l);
+
+        let err = |p: &SweepPlan| {
+            SweepPlan::parse(&p.to_toml().unwrap(), Path::new("l.toml"))
+                .unwrap_err()
+                .to_string()
+        };
+        fn settings(p: &mut SweepPlan) -> &mut LibrarySettings {
+            p.library.as_mut().unwrap()
+        }
+        let mut p = library_plan();
+        settings(&mut p).speeds_mps[1] = 0.2;
+        p.tasks[1].speed_mps = Some(0.2);
+        let e = err(&p);
+        assert!(
+            e.contains("'library.speeds_mps[1]' = 0.2") && e.contains("increasing"),
+            "{e}"
+        );
+        let mut p = library_plan();
+        p.tasks[2].speed_mps = Some(0.3);
+        let e = err(&p);
+        assert!(e.contains("'tasks[2].speed_mps' = Some(0.3)"), "{e}");
+        let mut p = library_plan();
+        settings(&mut p).library_file = PathBuf::from("lib.json");
+        assert!(err(&p).contains("'library.library_file' = \"lib.json\""));
+        let mut p = library_plan();
+        settings(&mut p).max_step_error = f64::NAN;
+        assert!(err(&p).contains("'library.max_step_error' = NaN"));
+        let mut p = library_plan();
+        p.library = None;
+        assert!(err(&p).contains("field 'library': a library plan needs it"));
+        let mut p = library_plan();
+        p.tasks[0].speed_mps = None;
+        assert!(err(&p).contains("a library task needs 'speed_mps'"));
+    }
+
     proptest::proptest! {
         /// Any plan of positive lengths and any index count survives TOML bit for bit.
         #[test]
@@ -446,7 +619,9 @@ mod tests {
                     index,
                     initial_m: Some([a, b]),
                     lengths_m: None,
+                    optimum_from_m: None,
                     treadmill: None,
+                    speed_mps: None,
                 })
                 .collect();
             let back = SweepPlan::parse(&p.to_toml().unwrap(), Path::new("p.toml")).unwrap();

@@ -2,7 +2,7 @@
 //! temporary name and a rename, so a task killed mid-run leaves no result (and a re-run
 //! replaces only its own file); read back with every problem named.
 
-use super::plan::{tool_version, Study, SweepPlan, Task};
+use super::plan::{tool_version, SweepPlan, Task};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -16,29 +16,57 @@ pub(crate) const RESULT_SCHEMA_VERSION: u32 = 1;
 pub(crate) enum Payload {
     /// A co-design run (or why it failed).
     Codesign(Result<planner::codesign::SweepOutcome, String>),
-    /// A landscape point (or why its solve failed).
-    Landscape(Result<planner::codesign::SweepOutcome, String>),
+    /// A landscape point (or why its solve failed), and whether it started from its inner
+    /// neighbour's solution.
+    Landscape {
+        /// The gait optimized there, or why it failed.
+        outcome: Result<planner::codesign::SweepOutcome, String>,
+        /// Whether the solve started from a neighbour's solution (else the initial gait).
+        from_neighbour: bool,
+    },
+    /// A landscape's co-design optimum with its active constraints (or why it failed).
+    Optimum(Result<crate::cli::codesign::OptimumSummary, String>),
     /// A treadmill run's figures (or why it could not run).
     Treadmill(Result<runtime::sim::matrix::RunSummary, String>),
+    /// A gait-library speed's outcome (its entry or why it is left out), or why the task could
+    /// not run.
+    Library(Box<Result<planner::library::SpeedOutcome, String>>),
 }
 
 impl Payload {
     /// The error of a run that failed.
     pub(crate) fn error(&self) -> Option<&str> {
         match self {
-            Payload::Codesign(Err(e)) | Payload::Landscape(Err(e)) | Payload::Treadmill(Err(e)) => {
-                Some(e)
+            Payload::Codesign(Err(e))
+            | Payload::Landscape {
+                outcome: Err(e), ..
             }
+            | Payload::Optimum(Err(e))
+            | Payload::Treadmill(Err(e)) => Some(e),
+            Payload::Library(r) => r.as_ref().as_ref().err().map(String::as_str),
             _ => None,
         }
     }
 
-    /// The study this payload belongs to.
-    fn study(&self) -> Study {
+    /// What this payload is the result of.
+    fn kind(&self) -> &'static str {
         match self {
-            Payload::Codesign(_) => Study::Codesign,
-            Payload::Landscape(_) => Study::Landscape,
-            Payload::Treadmill(_) => Study::Treadmill,
+            Payload::Codesign(_) => "co-design run",
+            Payload::Landscape { .. } => "landscape point",
+            Payload::Optimum(_) => "co-design optimum",
+            Payload::Treadmill(_) => "treadmill run",
+            Payload::Library(_) => "library speed",
+        }
+    }
+
+    /// Whether this is the result of a task like `task`.
+    fn fits(&self, task: &Task) -> bool {
+        match self {
+            Payload::Codesign(_) => task.initial_m.is_some(),
+            Payload::Landscape { .. } => task.lengths_m.is_some(),
+            Payload::Optimum(_) => task.optimum_from_m.is_some(),
+            Payload::Treadmill(_) => task.treadmill.is_some(),
+            Payload::Library(_) => task.speed_mps.is_some(),
         }
     }
 }
@@ -134,10 +162,10 @@ fn check(r: &TaskResult, plan: &SweepPlan, index: usize, path: &Path) -> Result<
             serde_json::to_string(&r.task).unwrap_or_default()
         );
     }
-    if r.payload.study() != plan.study {
+    if !r.payload.fits(&r.task) {
         bail!(
-            "{file}: field 'payload' holds a {} result; the plan's study is {}",
-            r.payload.study().name(),
+            "{file}: field 'payload' holds a {} result, not one of the {} plan's task {index}",
+            r.payload.kind(),
             plan.study.name()
         );
     }

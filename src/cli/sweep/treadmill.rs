@@ -1,7 +1,9 @@
 //! The treadmill study of a sweep plan: the matrix of `adam bench treadmill` (belt speeds, belt
 //! steps, pushes at points of the step, start and restart, × seeds), a task per run. The task
 //! function is `runtime::sim::matrix::run` and the report the bench's tables, the same the
-//! bench prints (without its push bisection, a search and not a matrix).
+//! bench prints (without its push bisection, a search and not a matrix). Its inputs, by
+//! content hash: the runtime config, the gait and its robot, and the gait library the config
+//! names for speed control (with the library's robot, if another file).
 
 use super::plan::{Input, SweepPlan, Task, TreadmillSettings};
 use super::result::{Payload, TaskResult};
@@ -13,6 +15,8 @@ use std::path::Path;
 const RUNTIME_CONFIG: &str = "runtime config";
 const GAIT: &str = "gait";
 const ROBOT: &str = "robot";
+const GAIT_LIBRARY: &str = "gait library";
+const LIBRARY_ROBOT: &str = "library robot";
 
 /// The inputs, settings and tasks of a treadmill plan.
 pub(crate) fn plan(
@@ -29,11 +33,25 @@ pub(crate) fn plan(
         .parent()
         .unwrap_or_else(|| Path::new("."))
         .join(&g.robot.urdf);
-    let inputs = vec![
+    let mut inputs = vec![
         Input::hashed(RUNTIME_CONFIG, config)?,
         Input::hashed(GAIT, gait)?,
         Input::hashed(ROBOT, &urdf)?,
     ];
+    // The gait library the config names (speed control) and its robot, if another file.
+    if let Some(rel) = runtime::config::RuntimeConfig::load(config)?.speed.library {
+        let library = config.parent().unwrap_or_else(|| Path::new(".")).join(rel);
+        let lib = model::library::GaitLibrary::load(&library)?;
+        let lib_urdf = library
+            .parent()
+            .unwrap_or_else(|| Path::new("."))
+            .join(&lib.robot.urdf);
+        inputs.push(Input::hashed(GAIT_LIBRARY, &library)?);
+        let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
+        if !same(&lib_urdf, &urdf) {
+            inputs.push(Input::hashed(LIBRARY_ROBOT, &lib_urdf)?);
+        }
+    }
     let tasks = matrix_runs(&seeds, quick)
         .into_iter()
         .enumerate()
@@ -41,7 +59,9 @@ pub(crate) fn plan(
             index,
             initial_m: None,
             lengths_m: None,
+            optimum_from_m: None,
             treadmill: Some(run),
+            speed_mps: None,
         })
         .collect();
     Ok((inputs, TreadmillSettings { seeds, quick }, tasks))
