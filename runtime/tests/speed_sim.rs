@@ -92,7 +92,7 @@ fn walks_a_belt_at_a_quarter_metre_per_second_at_the_belt_speed() {
             "seed {seed}: walked {:.4} m/s on a 0.25 m/s belt",
             report.speed_mps
         );
-        assert!(max_p < 0.16, "seed {seed}: {max_p:.3} m from the centre");
+        assert!(max_p < 0.25, "seed {seed}: {max_p:.3} m from the centre");
         // The estimate follows the truth (leg odometry drifts slowly).
         let last = rows.last().expect("rows");
         assert!(

@@ -9,20 +9,24 @@ use serde::{Deserialize, Serialize};
 /// (an operator `belt` command).
 ///
 /// At each impact k (the Poincaré section), with the last step's measured speed v_k, the
-/// belt speed b set by the operator and the estimated position p on the belt (+ forward):
+/// last stride's (two steps) v̄_k, the belt speed b set by the operator and the estimated
+/// position p on the belt (+ forward):
 /// ```text
 /// v_cmd = clamp(b + offset − position_gain_per_s · p, library range)
-/// e_k   = v_cmd − v_k             (speed error of the last stride: the last two steps)
+/// e_k   = v_cmd,k−1 − v̄_k          (speed error of the last stride against its command)
 /// I    += integral_gain · e_k                           (|I| ≤ integral_limit_mps)
-/// σ     = clamp(v_cmd + speed_gain · e_k + I, library range,
+/// σ     = clamp(b + offset + speed_gain · e_k + I, library range,
 ///               σ_prev ± max_change_per_step_mps)          (the library gait of the next step)
+/// Δℓ    = clamp(step_length_gain_s · (v_k − v_cmd), ± max_step_offset_m)
+///                                        (the next step lands Δℓ longer: the step lever)
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpeedConfig {
     /// Position loop: commanded speed per metre of position on the belt, (m/s)/m = 1/s.
     pub position_gain_per_s: f64,
-    /// Proportional gain of the step-to-step speed regulator (library speed per speed error).
+    /// Proportional gain of the step-to-step speed regulator (library speed per speed error;
+    /// 0 by default: the step lever is the proportional action).
     pub speed_gain: f64,
     /// Integral gain of the regulator, per step.
     pub integral_gain: f64,
@@ -31,6 +35,13 @@ pub struct SpeedConfig {
     /// The library speed changes by at most this much from one step to the next, m/s: each
     /// switch starts the new gait close to its own orbit.
     pub max_change_per_step_mps: f64,
+    /// The step lever: the next step lands this much longer per m/s that the last stride was
+    /// faster than the command, m/(m/s) = s (0: off).
+    #[serde(default = "default_step_length_gain_s")]
+    pub step_length_gain_s: f64,
+    /// The step lever's offset stays within ± this, m.
+    #[serde(default = "default_max_step_offset_m")]
+    pub max_step_offset_m: f64,
     /// Where the position on the belt comes from: leg odometry (the belt speed set by the
     /// operator integrated against the measured steps).
     #[serde(default)]
@@ -54,14 +65,24 @@ impl Default for SpeedConfig {
     fn default() -> Self {
         Self {
             position_gain_per_s: 0.3,
-            speed_gain: 0.5,
-            integral_gain: 0.1,
+            speed_gain: 0.0,
+            integral_gain: 0.2,
             integral_limit_mps: 0.1,
             max_change_per_step_mps: 0.02,
+            step_length_gain_s: default_step_length_gain_s(),
+            max_step_offset_m: default_max_step_offset_m(),
             position_source: PositionSource::Odometry,
             library: None,
         }
     }
+}
+
+fn default_step_length_gain_s() -> f64 {
+    0.1
+}
+
+fn default_max_step_offset_m() -> f64 {
+    0.04
 }
 
 impl SpeedConfig {
@@ -76,6 +97,8 @@ impl SpeedConfig {
                 "speed.max_change_per_step_mps",
                 self.max_change_per_step_mps,
             ),
+            ("speed.step_length_gain_s", self.step_length_gain_s),
+            ("speed.max_step_offset_m", self.max_step_offset_m),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {
