@@ -3,9 +3,10 @@
 //!
 //! This file parses and dispatches; each group of commands lives in its own module under
 //! [`cli`]: `run` (run, demo, soak), `plan` (plan, gait check), `codesign`, `bench`, `logs`
-//! (logs, replay, plot), `op`, `model` (model, generate-urdf) and `emulate` (emulated
-//! hardware). What a command prints at length comes from `Display` types in the group's
-//! `report` module; `cli::plots` draws the figures and `cli::paths` derives file paths.
+//! (logs, replay, plot), `op`, `live` (the live view in Foxglove), `model` (model,
+//! generate-urdf), `emulate` (emulated hardware) and `sweep` (a study as the tasks of a
+//! cluster's job array). What a command prints at length comes from `Display` types in the
+//! group's `report` module; `cli::plots` draws the figures and `cli::paths` derives file paths.
 //!
 //! **From any folder.** The shipped robots, gaits and configs are found from any working
 //! directory (`cli::shipped`): a relative `configs/…` input missing from the working directory
@@ -21,7 +22,7 @@ use cli::bench::BenchWhat;
 use cli::codesign::CodesignStudy;
 use cli::logs::{LogsCommand, PlotWhat};
 use cli::plan::GaitCommand;
-use cli::{bench, calibrate, can, codesign, emulate, logs, model, op, plan, run};
+use cli::{bench, calibrate, can, codesign, emulate, live, logs, model, op, plan, run, sweep};
 
 mod cli;
 
@@ -53,7 +54,7 @@ enum Command {
     /// log to `logs/<timestamp>.mcap`, print a summary.
     Demo(run::DemoArgs),
     /// Walk a gait with the real-time runtime on the simulated robot or on the robot over CAN.
-    Run(run::RunArgs),
+    Run(Box<run::RunArgs>),
     /// Walk the simulated robot for a long time under random faults; after each trip reset and
     /// walk on. Prints ticks, overruns, trips by reason, log drops, worst tick, distance.
     Soak(run::SoakArgs),
@@ -70,6 +71,9 @@ enum Command {
     },
     /// Send an operator command to a running `adam run` over iceoryx2.
     Op(op::OpArgs),
+    /// Serve a running `adam run` live to Foxglove (WebSocket, default ws://127.0.0.1:8765):
+    /// the log's channels, the robot in 3D and the belt; read-only unless --live-commands.
+    Live(live::LiveArgs),
     /// Print a robot model: bodies, joints, total mass, leg lengths and D(q) at the nominal pose.
     Model(model::ModelArgs),
     /// Co-design the thigh and shin lengths with the gait (paper Sec. III): write the
@@ -109,6 +113,13 @@ enum Command {
         #[command(subcommand)]
         command: can::CanCommand,
     },
+    /// A study as independent tasks for a cluster (SLURM job arrays): `adam sweep plan
+    /// --study codesign|landscape|treadmill`, `adam sweep slurm --plan P [--submit]`, `adam
+    /// sweep task --plan P [--index I]`, `adam sweep collect --plan P`.
+    Sweep {
+        #[command(subcommand)]
+        command: sweep::SweepCommand,
+    },
 }
 
 fn main() -> std::process::ExitCode {
@@ -125,7 +136,7 @@ fn main() -> std::process::ExitCode {
 fn dispatch(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Demo(args) => run::demo(&args),
-        Command::Run(args) => run::run(args),
+        Command::Run(args) => run::run(*args),
         Command::Soak(args) => run::soak(args),
         Command::Plan(args) => plan::plan(&args),
         Command::Gait {
@@ -163,6 +174,9 @@ fn dispatch(cli: Cli) -> Result<()> {
             what: BenchWhat::Library(args),
         } => bench::library(&args),
         Command::Bench {
+            what: BenchWhat::Live(args),
+        } => bench::live(&args),
+        Command::Bench {
             what:
                 BenchWhat::Treadmill {
                     seeds,
@@ -193,6 +207,7 @@ fn dispatch(cli: Cli) -> Result<()> {
             what: PlotWhat::Speed { log, out, force },
         } => logs::speed(log, out, force),
         Command::Op(args) => op::send(&args),
+        Command::Live(args) => live::live(&args),
         Command::Codesign(args) => match &args.study {
             None => codesign::codesign(&args),
             Some(CodesignStudy::Sweep { grid, out_dir }) => {
@@ -217,5 +232,6 @@ fn dispatch(cli: Cli) -> Result<()> {
             }
         },
         Command::GenerateUrdf(args) => model::write_urdf(args),
+        Command::Sweep { command } => sweep::sweep(command),
     }
 }

@@ -40,6 +40,20 @@ fn every_config_file_loads_and_validates() {
                     .check_against(&robot, &urdf, &path.display().to_string(), &origin)
                     .unwrap_or_else(|e| panic!("{e}"));
             }
+            // A Foxglove layout: its topics are checked against a log and the live server in
+            // tests/live.rs.
+            Some("json")
+                if path.parent().and_then(|p| p.file_name()) == Some("foxglove".as_ref()) =>
+            {
+                let text = std::fs::read_to_string(path).expect("readable");
+                let v: serde_json::Value = serde_json::from_str(&text)
+                    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                assert!(
+                    v["configById"].is_object() && v["layout"].is_object(),
+                    "{}",
+                    path.display()
+                );
+            }
             Some("json") => {
                 model::gait::GaitFile::load(path).unwrap_or_else(|e| panic!("{e}"));
             }

@@ -242,7 +242,8 @@ impl ExchangeReport {
 ///
 /// Implementations: [`crate::sim::bus::SimBus`] (simulated firmware behind the real codec),
 /// [`crate::socketcan_bus::SocketCanBus`] (Linux SocketCAN) and [`crate::udp::UdpBus`] (CAN over
-/// UDP, cannelloni's format). All pass [`crate::conformance`].
+/// UDP, cannelloni's format), the last two one [`crate::frame_bus::FrameBus`] over their
+/// transports. All pass [`crate::conformance`].
 pub trait MotorBus {
     /// Current lifecycle state.
     fn state(&self) -> Lifecycle;

@@ -82,6 +82,7 @@
 pub mod a1;
 pub mod bus;
 pub mod conformance;
+pub mod frame_bus;
 pub mod frame_log;
 pub mod imu;
 mod noise;

@@ -1,12 +1,13 @@
-//! `SocketCanBus`: the [`MotorBus`] over Linux SocketCAN, one raw socket per interface
-//! (one interface per limb).
+//! `SocketCanBus`: the [`MotorBus`](crate::bus::MotorBus) over Linux SocketCAN, one raw socket
+//! per interface (one interface per limb): [`FrameBus`] over [`CanInterfaces`].
 //!
 //! This adapter only moves frames: encoding, decoding and argument checks are the codec's
-//! and [`MotorTable`]'s. Sockets are nonblocking with error frames enabled. An exchange
+//! and [`MotorTable`](crate::bus::MotorTable)'s, the lifecycle and the round trip
+//! [`FrameBus`]'s. Sockets are nonblocking with error frames enabled. An exchange
 //! drains stale frames, writes every command, then polls all sockets until every
 //! commanded motor has replied or the budget (measured from the call with the monotonic
-//! clock, the one place in this crate that reads a clock) runs out. It busy-polls
-//! (yielding the CPU between empty polls): run the loop on a dedicated core.
+//! clock) runs out. It busy-polls (yielding the CPU between empty polls): run the loop on a
+//! dedicated core.
 //!
 //! * An error frame with the bus-off class → [`BusError::BusOff`]; any other error frame
 //!   → [`BusError::ErrorFrame`] with its class bits.
@@ -15,12 +16,11 @@
 //!   [`BusError::DeadlineExceeded`].
 //! * Foreign traffic (other ids, extended ids, remote frames) is ignored.
 
-use crate::a1::{self, Frame, FrameKind, Special};
-use crate::bus::{
-    BusError, ExchangeReport, Lifecycle, MotorBus, MotorSpec, MotorTable, Operation, MAX_MOTORS,
-};
-use crate::frame_log::{FrameDirection, FrameLog, LoggedFrame};
-use core::time::Duration;
+use crate::a1::{self, Frame, FrameKind};
+use crate::bus::BusError;
+pub use crate::frame_bus::LIFECYCLE_TIMEOUT;
+use crate::frame_bus::{io_error, send_by, FrameBus, FrameTransport, Replies};
+use crate::frame_log::{FrameDirection, FrameLog};
 use socketcan::{
     CanFrame, CanSocket, EmbeddedFrame, Frame as _, Socket, SocketOptions, StandardId,
 };
@@ -30,8 +30,6 @@ use thiserror::Error;
 
 /// `CAN_ERR_BUSOFF` class bit of an error frame (`linux/can/error.h`).
 pub const CAN_ERR_BUSOFF: u32 = 0x0040;
-/// How long `activate`, `deactivate` and `Drop` wait for acknowledgements.
-pub const LIFECYCLE_TIMEOUT: Duration = Duration::from_millis(20);
 
 /// Opening an interface failed.
 #[derive(Debug, Error)]
@@ -109,15 +107,15 @@ struct Interface {
     socket: CanSocket,
 }
 
-/// [`MotorBus`] over one or more SocketCAN interfaces.
-pub struct SocketCanBus {
+/// The SocketCAN interfaces of a [`SocketCanBus`], one raw socket each: its [`FrameTransport`].
+pub struct CanInterfaces {
     interfaces: Vec<Interface>,
-    table: MotorTable,
-    state: Lifecycle,
-    frames: FrameLog,
 }
 
-impl SocketCanBus {
+/// [`MotorBus`](crate::bus::MotorBus) over one or more SocketCAN interfaces.
+pub type SocketCanBus = FrameBus<CanInterfaces>;
+
+impl FrameBus<CanInterfaces> {
     /// Open `interfaces` (bus index = position), nonblocking, with error frames on.
     pub fn open(interfaces: &[&str]) -> Result<Self, OpenError> {
         if interfaces.is_empty() {
@@ -141,20 +139,24 @@ impl SocketCanBus {
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(Self {
-            interfaces: opened,
-            table: MotorTable::default(),
-            state: Lifecycle::Unconfigured,
-            frames: FrameLog::default(),
-        })
+        Ok(FrameBus::new(CanInterfaces { interfaces: opened }))
     }
 
     /// Interface name of bus `bus`.
     pub fn interface_name(&self, bus: usize) -> Option<&str> {
-        self.interfaces.get(bus).map(|i| i.name.as_str())
+        self.transport()
+            .interfaces
+            .get(bus)
+            .map(|i| i.name.as_str())
+    }
+}
+
+impl FrameTransport for CanInterfaces {
+    fn bus_count(&self) -> usize {
+        self.interfaces.len()
     }
 
-    fn drain(&self) -> Result<(), BusError> {
+    fn drain(&mut self) -> Result<(), BusError> {
         for (bus, iface) in self.interfaces.iter().enumerate() {
             loop {
                 match iface.socket.read_frame() {
@@ -164,234 +166,63 @@ impl SocketCanBus {
                         }
                     }
                     Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
-                    Err(e) => {
-                        return Err(BusError::Io {
-                            bus,
-                            kind: e.kind(),
-                        })
-                    }
+                    Err(e) => return Err(io_error(bus, &e)),
                 }
             }
         }
         Ok(())
     }
 
-    fn write(
+    fn send(
         &mut self,
         bus: usize,
-        frame: &Frame,
-        deadline: Instant,
-        start: Instant,
-    ) -> Result<(), BusError> {
-        let Some(can) = to_can_frame(frame) else {
-            return Ok(());
-        };
-        let socket = &self.interfaces[bus].socket;
-        loop {
-            match socket.write_frame(&can) {
-                Ok(()) => {
-                    self.frames.record(
-                        bus,
-                        FrameDirection::Tx,
-                        start.elapsed(),
-                        frame.id,
-                        &frame.data,
-                    );
-                    return Ok(());
-                }
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
-                    if Instant::now() >= deadline {
-                        return Err(BusError::DeadlineExceeded {
-                            needed: start.elapsed(),
-                            budget: deadline - start,
-                        });
-                    }
-                    std::thread::yield_now();
-                }
-                Err(e) => {
-                    return Err(BusError::Io {
-                        bus,
-                        kind: e.kind(),
-                    })
-                }
-            }
-        }
-    }
-
-    /// Send `frames[i]` on `buses[i]` and collect the reply of `motors[i]` into
-    /// `on_reply(i, reply)`, until all arrived or `budget` ran out.
-    fn round_trip(
-        &mut self,
         frames: &[Frame],
         buses: &[usize],
-        budget: Duration,
-        mut on_reply: impl FnMut(usize, a1::Reply),
-    ) -> Result<Duration, BusError> {
-        let start = Instant::now();
-        let deadline = start + budget;
-        self.frames.clear();
-        self.drain()?;
-        for (frame, &bus) in frames.iter().zip(buses) {
-            self.write(bus, frame, deadline, start)?;
+        log: &mut FrameLog,
+        start: Instant,
+        deadline: Instant,
+    ) -> Result<(), BusError> {
+        let socket = &self.interfaces[bus].socket;
+        for (frame, _) in frames.iter().zip(buses).filter(|(_, &b)| b == bus) {
+            let Some(can) = to_can_frame(frame) else {
+                continue;
+            };
+            send_by(bus, start, deadline, || socket.write_frame(&can))?;
+            log.record(
+                bus,
+                FrameDirection::Tx,
+                start.elapsed(),
+                frame.id,
+                &frame.data,
+            );
         }
-        let mut got = [false; MAX_MOTORS];
-        let mut outstanding = frames.len();
-        while outstanding > 0 {
-            let mut idle = true;
-            for bus in 0..self.interfaces.len() {
-                let frame = match self.interfaces[bus].socket.read_frame() {
-                    Ok(frame) => frame,
-                    Err(e) if e.kind() == io::ErrorKind::WouldBlock => continue,
-                    Err(e) => {
-                        return Err(BusError::Io {
-                            bus,
-                            kind: e.kind(),
-                        })
-                    }
-                };
-                idle = false;
-                match interpret(&frame) {
-                    Incoming::Reply(reply) => {
-                        let slot = frames.iter().zip(buses).position(|(f, &b)| {
-                            b == bus && a1::classify(f.id).map(|(_, m)| m) == Some(reply.motor)
-                        });
-                        if let Some(i) = slot.filter(|&i| !got[i]) {
-                            got[i] = true;
-                            outstanding -= 1;
-                            self.frames.record(
-                                bus,
-                                FrameDirection::Rx,
-                                start.elapsed(),
-                                frame.raw_id(),
-                                frame.data(),
-                            );
-                            on_reply(i, reply);
-                        }
-                    }
-                    Incoming::BadReply(motor, error) => {
-                        if self.table.get(motor).is_some() {
-                            return Err(BusError::BadReply { motor, error });
-                        }
-                    }
-                    Incoming::Error { class } => return Err(error_of(bus, class)),
-                    Incoming::Foreign => {}
-                }
-            }
-            if idle {
-                if Instant::now() >= deadline {
-                    break;
-                }
-                std::thread::yield_now();
-            }
-        }
-        if let Some(i) = (0..frames.len()).find(|&i| !got[i]) {
-            let motor = a1::classify(frames[i].id).map(|(_, m)| m);
-            if let Some(motor) = motor {
-                return Err(BusError::MissingReply {
-                    motor,
-                    bus: buses[i],
-                });
-            }
-        }
-        Ok(start.elapsed())
-    }
-
-    fn special_to_all(&mut self, special: Special) -> Result<(), BusError> {
-        let mut frames = [encode_placeholder(); MAX_MOTORS];
-        let mut buses = [0; MAX_MOTORS];
-        let mut specs: [Option<MotorSpec>; MAX_MOTORS] = [None; MAX_MOTORS];
-        let n = self.table.len();
-        for (i, spec) in self.table.iter().enumerate() {
-            frames[i] = a1::encode_special(spec.id, special);
-            buses[i] = spec.bus;
-            specs[i] = Some(spec);
-        }
-        let mut refused = None;
-        self.round_trip(&frames[..n], &buses[..n], LIFECYCLE_TIMEOUT, |_, reply| {
-            if special == Special::Enable && !reply.enabled {
-                refused.get_or_insert(BusError::EnableRefused {
-                    motor: reply.motor,
-                    errors: reply.errors,
-                });
-            }
-        })?;
-        refused.map_or(Ok(()), Err)
-    }
-}
-
-const fn encode_placeholder() -> Frame {
-    Frame {
-        id: 0,
-        data: [0; 8],
-    }
-}
-
-impl MotorBus for SocketCanBus {
-    fn state(&self) -> Lifecycle {
-        self.state
-    }
-
-    fn bus_count(&self) -> usize {
-        self.interfaces.len()
-    }
-
-    fn configure(&mut self, motors: &[MotorSpec]) -> Result<(), BusError> {
-        self.state.allows(Operation::Configure)?;
-        self.table = MotorTable::new(motors, self.interfaces.len())?;
-        self.state = Lifecycle::Configured;
         Ok(())
     }
 
-    fn activate(&mut self) -> Result<(), BusError> {
-        self.state.allows(Operation::Activate)?;
-        if let Err(e) = self.special_to_all(Special::Enable) {
-            // Leave nothing half enabled; the frame log keeps both rounds.
-            let enable_frames = self.frames;
-            let _ = self.special_to_all(Special::Disable);
-            let disable_frames = core::mem::replace(&mut self.frames, enable_frames);
-            self.frames.append(&disable_frames);
-            return Err(e);
-        }
-        self.state = Lifecycle::Active;
-        Ok(())
-    }
-
-    fn exchange(
+    fn poll<F: FnMut(usize, a1::Reply)>(
         &mut self,
-        commands: &[a1::Command],
-        replies: &mut [a1::Reply],
-        budget: Duration,
-    ) -> Result<ExchangeReport, BusError> {
-        if self.state != Lifecycle::Active {
-            return Err(BusError::NotActive { state: self.state });
+        bus: usize,
+        replies: &mut Replies<'_, F>,
+    ) -> Result<bool, BusError> {
+        let frame = match self.interfaces[bus].socket.read_frame() {
+            Ok(frame) => frame,
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok(false),
+            Err(e) => return Err(io_error(bus, &e)),
+        };
+        match interpret(&frame) {
+            Incoming::Reply(reply) => {
+                // A reply of a motor not asked (or a second one) is not used.
+                replies.offer(bus, frame.raw_id(), frame.data(), reply);
+            }
+            Incoming::BadReply(motor, error) => {
+                if replies.is_configured(motor) {
+                    return Err(BusError::BadReply { motor, error });
+                }
+            }
+            Incoming::Error { class } => return Err(error_of(bus, class)),
+            Incoming::Foreign => {}
         }
-        let (frames, buses, saturation) = self.table.prepare(commands, replies)?;
-        let n = commands.len();
-        let bus_time = self.round_trip(&frames[..n], &buses[..n], budget, |i, reply| {
-            replies[i] = reply;
-        })?;
-        Ok(ExchangeReport {
-            saturation,
-            bus_time,
-        })
-    }
-
-    fn deactivate(&mut self) -> Result<(), BusError> {
-        self.state.allows(Operation::Deactivate)?;
-        self.state = Lifecycle::Configured;
-        self.special_to_all(Special::Disable)
-    }
-
-    fn frames(&self) -> &[LoggedFrame] {
-        self.frames.frames()
-    }
-}
-
-impl Drop for SocketCanBus {
-    fn drop(&mut self) {
-        if self.state == Lifecycle::Active {
-            let _ = self.special_to_all(Special::Disable);
-        }
+        Ok(true)
     }
 }
 

@@ -37,7 +37,9 @@ mod speeds;
 pub use activity::{activity, Activity, BoundSide, GroupActivity, ACTIVE_SLACK};
 pub use audit::{audit, audit_variants, Audit, AuditRow, AuditSolve, AuditVariant, WIDE_PITCH_RAD};
 pub use endpoints::{load_sweep_endpoints, save_sweep, SweepEndpoint};
-pub use landscape::{landscape, Landscape, LandscapePoint, LandscapeStart};
+pub use landscape::{
+    grid_values, landscape, landscape_point, Landscape, LandscapePoint, LandscapeStart,
+};
 pub use speeds::{codesign_speeds, MultiSpeedProblem, MultiSpeedResult};
 
 use crate::biped::PlanarBiped;
@@ -397,8 +399,10 @@ pub struct SweepRun {
     pub wall_time_s: f64,
 }
 
-/// Where a run of the convergence study ended.
-#[derive(Clone, Debug, PartialEq)]
+/// Where a run of the convergence study ended (also a point of the landscape, and the result
+/// of a sweep task, which `adam sweep task` writes as JSON).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SweepOutcome {
     /// Converged thigh and shin length, m.
     pub lengths_m: [f64; 2],
@@ -437,9 +441,62 @@ pub fn sweep_grid(config: &PlannerConfig, n: usize) -> Vec<[f64; 2]> {
         .collect()
 }
 
-/// The paper's convergence study: one co-design per initial design in `starts`, all from the
-/// same warm start `initial` (planned at `model_lengths`), in parallel on all cores. `on_done`
-/// is called from the worker threads as runs finish (for a progress bar).
+/// One run of the convergence study: the co-design from the initial design `start`, warm-started
+/// from `initial` (planned at `model_lengths`). The task of `adam codesign sweep` and of
+/// `adam sweep task` for a co-design plan (the same function on both paths). Call it from a
+/// rayon worker (the in-process sweep's `par_iter`, `adam sweep task`'s one-thread pool) so
+/// that its solves evaluate their derivatives on one thread, as the sweep always did.
+pub fn sweep_run(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    model_lengths: [f64; 2],
+    start: [f64; 2],
+) -> SweepRun {
+    let t0 = Instant::now();
+    let outcome = codesign_run(
+        config,
+        "robot.urdf",
+        initial,
+        [model_lengths, start],
+        true,
+        &mut |_| {},
+    )
+    .map(|r| {
+        let g = &r.planned.gait;
+        let reports = r
+            .outer
+            .iter()
+            .map(|o| &o.report)
+            .chain(r.planned.stages.iter());
+        let objective = r
+            .planned
+            .stages
+            .last()
+            .map_or(g.cost_of_transport, |s| s.objective);
+        let (iterations, solve_time_s) =
+            reports.fold((0, 0.0), |(i, t), s| (i + s.iterations, t + s.solve_time_s));
+        SweepOutcome {
+            lengths_m: [r.design.thigh_length_m, r.design.shin_length_m],
+            step_length_m: g.step_length_m,
+            step_duration_s: g.step_duration_s,
+            speed_mps: g.speed_mps,
+            cost_of_transport: g.cost_of_transport,
+            objective,
+            iterations,
+            solve_time_s,
+        }
+    })
+    .map_err(|e| e.to_string());
+    SweepRun {
+        initial_m: start,
+        outcome,
+        wall_time_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// The paper's convergence study: one co-design per initial design in `starts` ([`sweep_run`]),
+/// all from the same warm start `initial` (planned at `model_lengths`), in parallel on all
+/// cores. `on_done` is called from the worker threads as runs finish (for a progress bar).
 pub fn sweep(
     config: &PlannerConfig,
     initial: &PlannedGait,
@@ -451,46 +508,7 @@ pub fn sweep(
     starts
         .par_iter()
         .map(|&start| {
-            let t0 = Instant::now();
-            let outcome = codesign_run(
-                config,
-                "robot.urdf",
-                initial,
-                [model_lengths, start],
-                true,
-                &mut |_| {},
-            )
-            .map(|r| {
-                let g = &r.planned.gait;
-                let reports = r
-                    .outer
-                    .iter()
-                    .map(|o| &o.report)
-                    .chain(r.planned.stages.iter());
-                let objective = r
-                    .planned
-                    .stages
-                    .last()
-                    .map_or(g.cost_of_transport, |s| s.objective);
-                let (iterations, solve_time_s) =
-                    reports.fold((0, 0.0), |(i, t), s| (i + s.iterations, t + s.solve_time_s));
-                SweepOutcome {
-                    lengths_m: [r.design.thigh_length_m, r.design.shin_length_m],
-                    step_length_m: g.step_length_m,
-                    step_duration_s: g.step_duration_s,
-                    speed_mps: g.speed_mps,
-                    cost_of_transport: g.cost_of_transport,
-                    objective,
-                    iterations,
-                    solve_time_s,
-                }
-            })
-            .map_err(|e| e.to_string());
-            let run = SweepRun {
-                initial_m: start,
-                outcome,
-                wall_time_s: t0.elapsed().as_secs_f64(),
-            };
+            let run = sweep_run(config, initial, model_lengths, start);
             on_done(&run);
             run
         })

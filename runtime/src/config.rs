@@ -399,7 +399,28 @@ impl RuntimeConfig {
             path: path.to_path_buf(),
             error,
         })?;
-        Self::from_toml(&text, &path.display().to_string())
+        let origin = path.display().to_string();
+        let config = Self::from_toml(&text, &origin)?;
+        for ignored in config.ignored_settings() {
+            eprintln!("warning: {origin}: {ignored}");
+        }
+        Ok(config)
+    }
+
+    /// The settings this build reads and ignores (kept so that older configs and the logs of
+    /// older runs still load), each with what replaced it; [`RuntimeConfig::load`] prints them
+    /// as warnings.
+    pub fn ignored_settings(&self) -> Vec<String> {
+        let mut ignored = Vec::new();
+        if let Some(factor) = self.safety.max_step_duration_factor {
+            ignored.push(format!(
+                "safety.max_step_duration_factor = {factor} is ignored: the step timeout trips \
+                 a stalled phase after safety.stall_timeout_s = {} s, not a slow step; \
+                 remove it",
+                self.safety.stall_timeout_s
+            ));
+        }
+        ignored
     }
 
     /// Parses and validates TOML; `origin` names the source in errors.
@@ -756,131 +777,4 @@ impl SlotLayout {
 }
 
 #[cfg(test)]
-#[allow(clippy::unwrap_used)]
-mod tests {
-    use super::*;
-
-    fn shipped() -> String {
-        std::fs::read_to_string(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../configs/runtime/adam.toml"
-        ))
-        .unwrap()
-    }
-
-    #[test]
-    fn shipped_config_loads_with_14_motors_on_valid_buses() {
-        let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
-        assert_eq!(c.leg_motors.len() + c.held.len(), 14);
-        assert_eq!(c.loop_.rate_hz, 1000.0);
-    }
-
-    #[test]
-    fn belt_speeds_are_checked_against_the_treadmill_range_naming_who_asked() {
-        let c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
-        assert_eq!(c.treadmill.belt_speed_range_mps, [0.0, 0.5]);
-        c.treadmill.check_belt_speed("--belt", 0.2).unwrap();
-        for bad in [-0.2, 5.0, f64::NAN] {
-            let e = c
-                .treadmill
-                .check_belt_speed("--belt", bad)
-                .unwrap_err()
-                .to_string();
-            assert!(
-                e.contains("--belt")
-                    && e.contains(&format!("{bad} m/s"))
-                    && e.contains("[0, 0.5] m/s"),
-                "{e}"
-            );
-        }
-        // Without a [treadmill] section: the default range; a reversed range is refused.
-        let without = shipped()
-            .replace("[treadmill]", "")
-            .replace("belt_speed_range_mps = [0.0, 0.5]", "");
-        let c = RuntimeConfig::from_toml(&without, "x.toml").unwrap();
-        assert_eq!(
-            c.treadmill.belt_speed_range_mps,
-            DEFAULT_BELT_SPEED_RANGE_MPS
-        );
-        let reversed = shipped().replace(
-            "belt_speed_range_mps = [0.0, 0.5]",
-            "belt_speed_range_mps = [0.5, 0.1]",
-        );
-        let e = RuntimeConfig::from_toml(&reversed, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("x.toml")
-                && e.contains("treadmill.belt_speed_range_mps")
-                && e.contains("[0.5, 0.1]"),
-            "{e}"
-        );
-    }
-
-    #[test]
-    fn a_wrong_schema_version_is_named_in_words() {
-        let text = shipped().replace("schema_version = 1", "schema_version = 2");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("`schema_version` = 2") && !e.contains("Some("),
-            "{e}"
-        );
-        let text = shipped().replace("schema_version = 1", "");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("`schema_version` = (missing)"), "{e}");
-    }
-
-    #[test]
-    fn errors_name_field_and_value() {
-        let text = shipped().replace("rate_hz = 1000.0", "rate_hz = 1500.0");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("x.toml") && e.contains("loop.rate_hz") && e.contains("1500"),
-            "{e}"
-        );
-        // A rate so small that its period overflows a Duration: an error, not a panic.
-        let text = shipped().replace("rate_hz = 1000.0", "rate_hz = 1e-320");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("loop.rate_hz") && e.contains("representable"),
-            "{e}"
-        );
-        let text = shipped().replace("schema_version = 1", "schema_version = 9");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("schema_version"), "{e}");
-        let text = shipped().replace("max_pitch_rad = 0.6", "max_pitch_rad = nan");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("safety.max_pitch_rad") && e.contains("NaN"),
-            "{e}"
-        );
-        let text = shipped().replace("[telemetry]", "[telemetry]\nbogus = 1");
-        let e = RuntimeConfig::from_toml(&text, "x.toml")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("bogus"), "{e}");
-    }
-
-    #[test]
-    fn four_motors_on_one_bus_are_refused_at_1_khz() {
-        let mut c = RuntimeConfig::from_toml(&shipped(), "adam.toml").unwrap();
-        c.held.clear();
-        for m in c.leg_motors.iter_mut() {
-            m.bus = 0;
-        }
-        let e = c.validate("t").unwrap_err().to_string();
-        assert!(e.contains("bus 0 carries 4 motors"), "{e}");
-    }
-}
+mod tests;

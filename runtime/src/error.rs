@@ -117,6 +117,14 @@ pub enum RuntimeError {
         /// What failed.
         message: String,
     },
+    /// The live view's server could not start (a port in use, an address not available).
+    #[error("live view: cannot listen on {addr}: {message}")]
+    Live {
+        /// The address asked for.
+        addr: std::net::SocketAddr,
+        /// What the OS said, and a hint.
+        message: String,
+    },
     /// A thread of the runtime panicked or could not be spawned.
     #[error("thread `{name}`: {message}")]
     Thread {

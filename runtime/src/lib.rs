@@ -17,6 +17,7 @@
 //! | [`backend`] | what the loop runs on: [`backend::Backend`] = [`drivers::bus::MotorBus`] + [`drivers::imu::Imu`]; [`backend::WithImu`] (pair a bus with an IMU) |
 //! | [`rt_loop`] | the fixed-rate loop on its own thread, real or simulated [`rt_loop::Clock`] |
 //! | [`telemetry`] | the `#[repr(C)]` [`telemetry::sample::StateSample`] over iceoryx2 (feature `iceoryx2`, default); MCAP writer ([`telemetry::log`]) and reader ([`telemetry::log_read`]: `adam logs info`, joint series; [`telemetry::salvage`]: every reader reads past damage; [`telemetry::recover`]: `adam logs recover`); deterministic [`telemetry::replay`] (`adam replay`, fixtures); the `/speed` channel ([`telemetry::speed_log`], [`telemetry::speed_read`]: `adam plot speed`); every CAN frame on `/can` ([`telemetry::frames`]: `adam logs candump`) |
+//! | [`live`] | the live view (`adam live`): the Foxglove WebSocket protocol on tokio ([`live::protocol`] sans-IO, [`live::server`]), fed from the loop's iceoryx2 samples in its own process ([`live::source`]) through [`live::feed`] (the log's channels and the robot in 3D, decimated per channel) |
 //! | [`tiles`] | gait tiles: stick figures at evenly spaced phases of one logged step (`adam plot tiles`) |
 //! | [`robot`] | the real robot: the motors over SocketCAN and the torso IMU, a VN-100 on a serial port ([`drivers::vn100`], `--imu vn100:/dev/ttyUSB0`), one backend for the same loop; whatever is missing is named once |
 //! | [`udp`] | the loop over CAN-over-UDP links ([`drivers::udp::UdpBus`]): `adam run --backend udp` against `adam emulate motors` ([`sim::emulate`]) or cannelloni gateways |
@@ -66,6 +67,7 @@ pub mod config;
 pub mod control;
 mod error;
 pub mod estimator;
+pub mod live;
 pub mod operator;
 pub mod robot;
 pub mod rt_loop;

@@ -570,6 +570,8 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
                 tick_compute_ns: compute_ns,
             },
         );
+        sample.true_pitch_rad = backend.true_pitch_rad().unwrap_or(f64::NAN);
+        sample.true_belt_position_m = backend.true_belt_position_m().unwrap_or(f64::NAN);
         #[cfg(feature = "iceoryx2")]
         if let Some(p) = publisher.as_mut() {
             p.publish(&sample);

@@ -195,6 +195,26 @@ impl Trip {
         }
     }
 
+    /// The [`Trip::name`] of a [`Trip::code`] (`None`: 0 or no such code), for readers that
+    /// see only the code (the live view, from a `StateSample`).
+    pub fn name_of_code(code: u32) -> Option<&'static str> {
+        const NAMES: [&str; 11] = [
+            "e_stop",
+            "joint_limit",
+            "torque_saturation",
+            "fall",
+            "over_temperature",
+            "motor_fault",
+            "missing_replies",
+            "imu_stale",
+            "imu_implausible",
+            "overrun_streak",
+            "step_timeout",
+        ];
+        code.checked_sub(1)
+            .and_then(|i| NAMES.get(i as usize).copied())
+    }
+
     /// Short name of the reason (a `&'static str`, no formatting).
     pub fn name(&self) -> &'static str {
         match self {

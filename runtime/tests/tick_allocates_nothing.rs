@@ -7,52 +7,25 @@
 //! `controller_is_owned_plain_data` checks it is `'static + Clone + Send + Sync` (no borrowed
 //! shared state).
 
-// A global allocator is an `unsafe impl`; it only forwards to `System` and counts.
+// The counting allocator is the drivers' no-allocation tests' own (one copy in the workspace).
 #![allow(unsafe_code)]
+
+#[path = "../../drivers/tests/common/counting_alloc.rs"]
+mod counting_alloc;
 
 use runtime::config::PhaseSource;
 use runtime::control::{CommandMode, ControlState, OperatorCommand, TickInput, TickOutput};
 use runtime::estimator::GRAVITY_MPS2;
 use runtime::{ImuSample, Setup};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
-struct Counting;
-
-thread_local! {
-    static COUNT: Cell<u64> = const { Cell::new(0) };
-    static ACTIVE: Cell<bool> = const { Cell::new(false) };
-}
-
-// SAFETY: every method forwards its arguments unchanged to `System`, which upholds the
-// `GlobalAlloc` contract; the counters are thread-local `Cell`s and never allocate.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if ACTIVE.with(|a| a.get()) {
-            COUNT.with(|c| c.set(c.get() + 1));
-        }
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if ACTIVE.with(|a| a.get()) {
-            COUNT.with(|c| c.set(c.get() + 1));
-        }
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: counting_alloc::Counting = counting_alloc::Counting;
 
-fn counted<R>(f: impl FnOnce() -> R) -> (R, u64) {
-    COUNT.with(|c| c.set(0));
-    ACTIVE.with(|a| a.set(true));
+/// Runs `f` with this thread's allocations counted: its result and the count.
+fn counted<R>(f: impl FnOnce() -> R) -> (R, usize) {
+    counting_alloc::start();
     let r = f();
-    ACTIVE.with(|a| a.set(false));
-    (r, COUNT.with(|c| c.get()))
+    (r, counting_alloc::stop())
 }
 
 /// The test gait library (`tests/fixtures/library/`), sorted by speed.

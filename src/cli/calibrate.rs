@@ -4,8 +4,8 @@
 //! input). `--backend sim` calibrates the simulated robot, whose motors can be mounted wrong
 //! (`--sim-offsets`, `--sim-flip`); `--backend can` the robot, the operator clamping each pose.
 
+use crate::cli::bringup_target::{Backend, BringupTarget};
 use crate::cli::paths::writable;
-use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use drivers::sim::firmware::EncoderMount;
 use runtime::bringup::{self, JigPose};
@@ -16,16 +16,10 @@ use std::path::{Path, PathBuf};
 /// Arguments of `adam calibrate`.
 #[derive(clap::Args)]
 pub(crate) struct CalibrateArgs {
-    /// The robot to calibrate: the simulated one, or the robot over SocketCAN.
-    #[arg(long, value_enum)]
-    backend: Backend,
-    /// Runtime config (TOML) to start from: its buses, motors and jig poses
-    /// (`[calibration.<joint>] jig_rad`).
-    #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
-    config: PathBuf,
-    /// Gait file (JSON) whose robot (URDF) bounds the joints; default: the co-designed ADAM's.
-    #[arg(long, default_value = runtime::DEFAULT_GAIT)]
-    gait: PathBuf,
+    /// The robot to calibrate (`--backend sim|can`), its runtime config (the jig poses:
+    /// `[calibration.<joint>] jig_rad`), gait and CAN interfaces.
+    #[command(flatten)]
+    target: BringupTarget,
     /// The new runtime config to write: the input with its `[calibration]` tables replaced.
     /// Never the input file; an existing file needs --force.
     #[arg(long)]
@@ -42,18 +36,6 @@ pub(crate) struct CalibrateArgs {
     /// repeatable (sim).
     #[arg(long)]
     sim_flip: Vec<String>,
-    /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
-    #[arg(long, value_delimiter = ',')]
-    can_interfaces: Option<Vec<String>>,
-}
-
-/// Backend of `adam calibrate`.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum Backend {
-    /// The simulated robot hung on the boom (its legs clamped in the jig).
-    Sim,
-    /// The robot over SocketCAN.
-    Can,
 }
 
 /// The simulated motors' mounts from `--sim-offsets` and `--sim-flip`.
@@ -132,41 +114,22 @@ fn prompt_pose(setup: &runtime::Setup, pose: JigPose) -> runtime::Result<()> {
 /// `adam calibrate`.
 pub(crate) fn calibrate(args: CalibrateArgs) -> Result<()> {
     let CalibrateArgs {
-        backend,
-        config,
-        gait,
+        target,
         out,
         force,
         sim_offsets,
         sim_flip,
-        can_interfaces,
     } = args;
-    let unused: Vec<&str> = match backend {
-        Backend::Sim => [("--can-interfaces", can_interfaces.is_some())]
-            .iter()
-            .filter_map(|(f, set)| set.then_some(*f))
-            .collect(),
-        Backend::Can => [
-            ("--sim-offsets", sim_offsets.is_some()),
-            ("--sim-flip", !sim_flip.is_empty()),
-        ]
-        .iter()
-        .filter_map(|(f, set)| set.then_some(*f))
-        .collect(),
-    };
-    if !unused.is_empty() {
-        bail!(
-            "{} not used by this --backend: remove {}",
-            unused.join(", "),
-            if unused.len() == 1 { "it" } else { "them" }
-        );
-    }
-    let (config, gait) = (shipped::input(&config), shipped::input(&gait));
+    target.refuse_unused(&[
+        ("--sim-offsets", sim_offsets.is_some()),
+        ("--sim-flip", !sim_flip.is_empty()),
+    ])?;
+    let (config, gait) = target.inputs();
     check_out(&config, &out, force)?;
     let text = std::fs::read_to_string(&config)
         .with_context(|| format!("reading {}", config.display()))?;
     let setup = runtime::Setup::load(&config, &gait)?;
-    let outcome = match backend {
+    let outcome = match target.backend {
         Backend::Sim => {
             let mounts = sim_mounts(sim_offsets.as_deref(), &sim_flip)?;
             println!(
@@ -189,9 +152,7 @@ pub(crate) fn calibrate(args: CalibrateArgs) -> Result<()> {
             })?
         }
         Backend::Can => {
-            let interfaces =
-                can_interfaces.unwrap_or_else(|| runtime::robot::default_interfaces(&setup));
-            let mut bus = runtime::robot::open_can(&setup, &interfaces)?;
+            let mut bus = runtime::robot::open_can(&setup, &target.interfaces(&setup))?;
             bringup::calibrate(&setup, &mut bus, |pose, _| prompt_pose(&setup, pose))?
         }
     };

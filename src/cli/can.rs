@@ -2,10 +2,9 @@
 //! temperature, error flags), the silent ones named (`runtime::bringup::scan`); on the simulated
 //! robot or over SocketCAN.
 
-use crate::cli::shipped;
+use crate::cli::bringup_target::{Backend, BringupTarget};
 use anyhow::{bail, Result};
 use runtime::bringup::{self, Answer};
-use std::path::PathBuf;
 
 /// `adam can …`.
 #[derive(clap::Subcommand)]
@@ -19,54 +18,23 @@ pub(crate) enum CanCommand {
 /// Arguments of `adam can scan`.
 #[derive(clap::Args)]
 pub(crate) struct ScanArgs {
-    /// The simulated robot, or the robot over SocketCAN.
-    #[arg(long, value_enum)]
-    backend: Backend,
-    /// Runtime config (TOML): the buses and motors.
-    #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
-    config: PathBuf,
-    /// Gait file (JSON) whose robot the config drives; default: the co-designed ADAM's.
-    #[arg(long, default_value = runtime::DEFAULT_GAIT)]
-    gait: PathBuf,
+    /// The robot to scan (`--backend sim|can`), its runtime config (the buses and motors), gait
+    /// and CAN interfaces.
+    #[command(flatten)]
+    target: BringupTarget,
     /// A simulated motor that does not answer (a cut cable), by id; repeatable (sim).
     #[arg(long)]
     sim_silent: Vec<u8>,
-    /// CAN interfaces, one per bus of the config (can; default can0,can1,…).
-    #[arg(long, value_delimiter = ',')]
-    can_interfaces: Option<Vec<String>>,
-}
-
-/// Backend of `adam can scan`.
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum Backend {
-    /// The simulated robot (its four leg motors behind the simulated A1 firmware).
-    Sim,
-    /// The robot over SocketCAN (every motor of the config).
-    Can,
 }
 
 /// `adam can scan`.
 pub(crate) fn scan(args: ScanArgs) -> Result<()> {
-    let ScanArgs {
-        backend,
-        config,
-        gait,
-        sim_silent,
-        can_interfaces,
-    } = args;
-    match backend {
-        Backend::Sim if can_interfaces.is_some() => {
-            bail!("--can-interfaces is not used by --backend sim: remove it")
-        }
-        Backend::Can if !sim_silent.is_empty() => {
-            bail!("--sim-silent is not used by --backend can: remove it")
-        }
-        _ => {}
-    }
-    let (config, gait) = (shipped::input(&config), shipped::input(&gait));
+    let ScanArgs { target, sim_silent } = args;
+    target.refuse_unused(&[("--sim-silent", !sim_silent.is_empty())])?;
+    let (config, gait) = target.inputs();
     let setup = runtime::Setup::load(&config, &gait)?;
     let budget = std::time::Duration::from_secs_f64(setup.config.period_s());
-    let scanned = match backend {
+    let scanned = match target.backend {
         Backend::Sim => {
             let targets = bringup::preflight::targets(&setup.config, false)?;
             let mut options = runtime::sim::run::SimWalkOptions::new(1.0);
@@ -93,8 +61,7 @@ pub(crate) fn scan(args: ScanArgs) -> Result<()> {
         }
         Backend::Can => {
             let targets = bringup::preflight::targets(&setup.config, true)?;
-            let interfaces =
-                can_interfaces.unwrap_or_else(|| runtime::robot::default_interfaces(&setup));
+            let interfaces = target.interfaces(&setup);
             let mut bus = runtime::robot::open_can(&setup, &interfaces)?;
             println!(
                 "adam can scan: {} over {}",

@@ -2,10 +2,12 @@
 //! that calls the libraries, and (in `report`) the `Display` types of what it prints.
 
 pub(crate) mod bench;
+pub(crate) mod bringup_target;
 pub(crate) mod calibrate;
 pub(crate) mod can;
 pub(crate) mod codesign;
 pub(crate) mod emulate;
+pub(crate) mod live;
 pub(crate) mod logs;
 pub(crate) mod model;
 pub(crate) mod op;
@@ -14,3 +16,4 @@ pub(crate) mod plan;
 pub(crate) mod plots;
 pub(crate) mod run;
 pub(crate) mod shipped;
+pub(crate) mod sweep;

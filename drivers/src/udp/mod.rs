@@ -60,7 +60,7 @@ pub mod imu_frames;
 pub mod serve;
 mod socket;
 
-pub use bus::{LinkStats, UdpBus, UdpOpenError, LIFECYCLE_TIMEOUT};
+pub use bus::{LinkStats, UdpBus, UdpLinks, UdpOpenError, LIFECYCLE_TIMEOUT};
 
 /// The peer address of every bus: `addrs` one per bus, or a single address whose port is bus
 /// 0's and `port + k` bus `k`'s. `None` if the count fits neither or a port passes 65535.

@@ -129,8 +129,35 @@ fn solve_point(
     ))
 }
 
-/// The grid values of a range: n points from its lower to its upper end.
-fn grid_values([a, b]: [f64; 2], n: usize) -> Vec<f64> {
+/// A grid point solved from the gait at the initial design, and its warm start for a neighbour.
+fn initial_point(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    lengths_m: [f64; 2],
+) -> (LandscapePoint, Option<WarmStart>) {
+    let r = solve_point(config, lengths_m, &initial.x, None);
+    let p = LandscapePoint {
+        lengths_m,
+        outcome: r.as_ref().map(|s| s.0.clone()).map_err(|e| e.to_string()),
+        from_neighbour: false,
+    };
+    (p, r.ok().map(|s| s.1))
+}
+
+/// One point of the landscape started from `initial` (the `initial` start, [`LandscapeStart`]):
+/// the gait optimized at the fixed design `lengths_m`. The task of a landscape plan (`adam
+/// sweep task`) and of `adam codesign landscape --start initial`, on both paths from a rayon
+/// worker (its derivatives on one thread).
+pub fn landscape_point(
+    config: &PlannerConfig,
+    initial: &PlannedGait,
+    lengths_m: [f64; 2],
+) -> LandscapePoint {
+    initial_point(config, initial, lengths_m).0
+}
+
+/// The grid values of a range: n points from its lower to its upper end (n ≥ 2).
+pub fn grid_values([a, b]: [f64; 2], n: usize) -> Vec<f64> {
     (0..n)
         .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
         .collect()
@@ -154,14 +181,9 @@ pub fn landscape(
     let (thigh_m, shin_m) = (grid_values(c.thigh_m, n), grid_values(c.shin_m, n));
     let at = |i: usize, j: usize| [thigh_m[i], shin_m[j]];
     let from_initial = |i: usize, j: usize| {
-        let r = solve_point(config, at(i, j), &initial.x, None);
-        let p = LandscapePoint {
-            lengths_m: at(i, j),
-            outcome: r.as_ref().map(|s| s.0.clone()).map_err(|e| e.to_string()),
-            from_neighbour: false,
-        };
+        let (p, w) = initial_point(config, initial, at(i, j));
         on_done(&p);
-        (p, r.ok().map(|s| s.1))
+        (p, w)
     };
     let mut points: Vec<Option<LandscapePoint>> = vec![None; n * n];
     // Whole solves on the workers: a pool of its own with the stack of a main thread (a

@@ -9,6 +9,39 @@
 //!
 //! Frames: positions are world axes `[x, z]`, relative to the stance foot. Everything here
 //! works on fixed-size arrays and never allocates.
+//!
+//! # How the first step gets its energy
+//! With point feet, single support cannot speed the robot up: the angular momentum about the
+//! stance foot changes only by gravity's moment, so a robot at rest behind its stance foot
+//! falls back. The energy of the first step comes from double support: while both feet are
+//! down the rear leg pushes (its vertical force behind the front foot turns the robot forward
+//! about it), and the launch's quintic ends with the torso moving forward fast enough to pass
+//! over the stance foot (for an inverted pendulum of height z from x behind:
+//! v > |x|·√(g/z); the launch ends 4 cm behind at 0.2 m/s, or faster when it must end further
+//! back). Only then does the rear foot lift.
+//!
+//! # The restart of a re-planned gait (measured, not solved)
+//! The shipped default gait (`configs/gaits/adam_codesign.json`, a uniform-mesh plan whose orbit
+//! is 3.55 % slower than planned) is kept because the graded-mesh re-plan of the same robot
+//! (0.1686 m in 0.9000 s, orbit +0.28 %) starts from Stand but does not restart after a Stop.
+//! Traced tick by tick on the simulator (Walk at 3 s, Stop at 8 s, Walk at 11 s; seeds 1–3):
+//! 1. the braking step (0.24 m) lands with the feet 0.26 m apart and Stand, holding the landed
+//!    joint angles, rocks from foot to foot; the front foot scuffs forward and the robot comes
+//!    to rest on feet 0.30 m apart, still rocking 2 s after the landing;
+//! 2. from that stance the launch cannot carry the torso over the front foot without dropping
+//!    it (the rear leg's reach): it ends 6 cm behind the front foot, 3 cm lower, the stance
+//!    knee bent 0.71 rad against the gait's 0.12 rad;
+//! 3. the first step's blend straightens that knee within ~0.15 s (0.3–0.6 of phase at
+//!    τ̇ ≈ 2.4 /s): the stance foot leaves the ground (a hop, 0.72 m/s), the swing foot lands
+//!    early and short (0.09 m), the next step long (0.24–0.26 m), and that step's impact leaves
+//!    the torso 13 cm behind the new stance foot, too slow to pass over it: the phase stalls
+//!    and the step timeout trips (1.5 s).
+//!
+//! Tried and not enough (seeds 1–3): a launch that waits until the robot is at rest (from rest
+//! on the 0.30 m stance the same chain follows: 0 of 3 restarts), and with it a braking step of
+//! 0.20 or 0.22 m (1 of 3 each). What the trace points at: a Stop that ends on the gait's own stance width, or a
+//! first step after a wide stance that keeps the crouch and takes the rear foot only as far as
+//! a normal step (an initiation step, the braking step reversed).
 
 use crate::slots::LEG_SLOTS;
 use model::robot::{Legs, PlanarModel, Side, MAX_DOF};

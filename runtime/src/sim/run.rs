@@ -88,6 +88,9 @@ pub struct SimWalkOptions {
     pub real_time: bool,
     /// Faults to inject (`None`: none). Overrun faults need the simulated clock.
     pub faults: Option<FaultProfile>,
+    /// Publish every tick's state sample over iceoryx2 (`telemetry.service_name`): for the
+    /// live view (`adam live`) and any other subscriber.
+    pub publish: bool,
     /// End the run this long after a safety trip (`None`: run the whole duration).
     pub stop_after_trip_s: Option<f64>,
     /// How each leg motor sits on its joint, in leg slot order (default: as the model's joint,
@@ -116,6 +119,7 @@ impl SimWalkOptions {
             log_path: None,
             real_time: false,
             faults: None,
+            publish: false,
             stop_after_trip_s: None,
             encoder_mounts: Default::default(),
             preflight: false,
@@ -310,6 +314,7 @@ pub fn walk_with_operator(
     loop_options.script.sort_by(|a, b| a.0.total_cmp(&b.0));
     loop_options.log_path = options.log_path.clone();
     loop_options.stop_after_trip_s = options.stop_after_trip_s;
+    loop_options.publish = options.publish;
 
     // A wall-clock run asks for mlockall and SCHED_FIFO like the robot run (a warning if denied).
     loop_options.realtime = options.real_time;

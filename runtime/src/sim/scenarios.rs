@@ -10,6 +10,20 @@
 //! | [`start_restart`] | from Stand; stop → Stand → Walk; belt started after the robot walks | trips, falls |
 //!
 //! Every run takes seconds of simulation; the bench runs them in parallel.
+//!
+//! # Why the start on a ramping belt stalls
+//! [`Restart::FromStand`] (and so [`Restart::StopAndWalkAgain`], which trips before its Stop)
+//! fails in all five seeds with a step timeout 2.8 s after Walk; traced tick by tick (seed 1,
+//! the shipped library): the belt ramps to 0.25 m/s (0.5 m/s²) under the standing robot, and
+//! the accelerometer, which the pitch estimator trusts at rest, sees that ramp as a tilt of
+//! gravity (0.05 rad); the estimate is 0.02 rad off at Walk and 0.033 rad off at the end of the
+//! first step. With θ⁻ − θ⁺ ≈ 0.24 rad that shifts the phase by 0.1–0.14: the first step lands
+//! late and long (0.20 m for the 0.15 m gait), and the next, on the library's slowest gait, does
+//! not get over its stance foot. Measuring the pitch with the legs in Stand (the pitch at which
+//! both feet are at the same height, as at each touchdown) removed the bias and that run walked
+//! on (18 steps by 16 s, no trip); but it changed the launch of `runtime/tests/restart_sim.rs`'s library run on an
+//! endless belt (seed 1: a step timeout where it walked), so it is not in: the launch is
+//! sensitive to milliradians of pitch at its start.
 
 use crate::control::{ControlState, OperatorCommand};
 use crate::sim::faults::{Fault, FaultEvent, FaultProfile};
@@ -90,7 +104,8 @@ pub fn push_at_phase(force_x_n: f64, phase: f64, seed: u64) -> SimWalkOptions {
 }
 
 /// The start and restart cases.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Restart {
     /// From Stand (belt at rest while the controller ramps), the belt ramps to 0.25 m/s at
     /// 2 s, Walk at 3 s; 20 s.

@@ -16,6 +16,10 @@
 //! treadmill speed control runs: [`crate::telemetry::speed_log`]); `/can` (every CAN frame: [`crate::telemetry::frames`]). Floats in `/input` and `/command` are
 //! written in shortest round-trip form and read back bit for bit (serde_json
 //! `float_roundtrip`); non-finite values are the strings `"NaN"`, `"inf"`, `"-inf"`.
+//! For Foxglove's 3D panel ([`crate::telemetry::scene`]): `/tf` (`foxglove.FrameTransforms` of
+//! every link, 100 Hz), `/scene` (`foxglove.SceneUpdate`: the belt, the links as lines) and
+//! `/robot_description` (the URDF as `std_msgs/String`), each JSON. Schemas and the per-sample
+//! messages come from [`crate::telemetry::channels`], shared with the live view.
 //! The gait file, the runtime config and the robot's URDF are attached, so a log replays on
 //! its own; metadata `run` describes the run (including `start_walking` and `with_held`,
 //! which replay needs) and `log_stats` counts written and dropped records.
@@ -158,19 +162,7 @@ pub const LOG_SCHEMA_VERSION: u32 = 1;
 /// Channel metadata key holding [`LOG_SCHEMA_VERSION`].
 pub const SCHEMA_VERSION_KEY: &str = "adam_log_schema";
 
-/// Names of the logged channels.
-pub const CHANNELS: [&str; 10] = [
-    "/joints",
-    "/hzd",
-    "/estimator",
-    "/state",
-    "/safety",
-    "/transitions",
-    "/input",
-    "/command",
-    "/speed",
-    "/can",
-];
+pub use super::channels::CHANNELS;
 
 /// Attachment names: the gait file, the runtime config, the robot's URDF.
 pub const ATTACHMENTS: [&str; 3] = ["gait.json", "runtime.toml", "robot.urdf"];
@@ -197,6 +189,8 @@ pub struct LogContext {
     pub metadata: BTreeMap<String, String>,
     /// Compress chunks with zstd.
     pub zstd: bool,
+    /// The robot in 3D (`/tf`, `/scene`, `/robot_description`; `None`: not logged).
+    pub scene: Option<super::scene::RobotScene>,
 }
 
 /// The joint name of every driven slot of `layout` (`None`: not driven, not logged).
@@ -244,6 +238,7 @@ impl LogContext {
                 .then(|| serde_json::to_string(&setup.library).unwrap_or_default()),
             metadata,
             zstd: config.telemetry.log_zstd,
+            scene: super::scene::RobotScene::new(setup, *layout).ok(),
         }
     }
 }
@@ -325,6 +320,7 @@ pub fn start(
             let mut stats = LogStats::default();
             let mut w = RecordWriter {
                 writer,
+                scene: super::scene::SceneLog::default(),
                 ids,
                 context,
                 seq: 0,
@@ -402,15 +398,7 @@ struct Channels {
     command: u16,
     speed: u16,
     can: u16,
-}
-
-fn number() -> Value {
-    json!({"type": "number"})
-}
-
-fn object_of(names: impl Iterator<Item = String>, item: Value) -> Value {
-    let props: Map<String, Value> = names.map(|n| (n, item.clone())).collect();
-    json!({"type": "object", "properties": props})
+    scene: super::scene::SceneChannels,
 }
 
 impl Channels {
@@ -418,72 +406,29 @@ impl Channels {
         w: &mut mcap::Writer<W>,
         ctx: &LogContext,
     ) -> mcap::McapResult<Self> {
-        let joint = json!({"type": "object", "properties": {
-            "q_rad": number(), "dq_rad_s": number(), "tau_nm": number(),
-            "temperature_c": number(), "q_cmd_rad": number(), "dq_cmd_rad_s": number(),
-            "tau_cmd_nm": number(), "fresh": {"type": "boolean"}}});
-        let mut joints = object_of(ctx.joint_names.iter().flatten().cloned(), joint);
-        joints["properties"]["t_s"] = number();
-        let outputs = || object_of(ctx.output_names.iter().cloned(), number());
-        let hzd = json!({"type": "object", "properties": {
-            "t_s": number(), "phase": number(), "phase_rate_per_s": number(),
-            "stance": {"type": "string"}, "steps": {"type": "integer"},
-            "swing_foot_height_m": number(),
-            "y_des_rad": outputs(), "dy_des_rad_s": outputs(), "y_act_rad": outputs()}});
-        let estimator = json!({"type": "object", "properties": {
-            "t_s": number(), "pitch_rad": number(), "pitch_rate_rad_s": number(),
-            "gyro_bias_rad_s": number(), "imu_gyro_rad_s": number(),
-            "imu_accel_x_mps2": number(), "imu_accel_z_mps2": number()}});
-        let state = json!({"type": "object", "properties": {
-            "t_s": number(), "tick": {"type": "integer"}, "state": {"type": "string"},
-            "state_code": {"type": "integer"}, "trip_code": {"type": "integer"},
-            "overruns": {"type": "integer"}, "overrun_streak": {"type": "integer"},
-            "tick_compute_us": number()}});
-        let safety = json!({"type": "object", "properties": {
-            "t_s": number(), "tick": {"type": "integer"}, "reason": {"type": "string"},
-            "code": {"type": "integer"}}, "additionalProperties": true});
-        let transitions = json!({"type": "object", "properties": {
-            "t_s": number(), "from": {"type": "string"}, "to": {"type": "string"}}});
-        let exact = || json!({"type": ["number", "string"]});
-        let motor = json!({"type": "object", "properties": {
-            "fresh": {"type": "boolean"}, "q_rad": exact(), "dq_rad_s": exact(),
-            "tau_nm": exact(), "temperature_c": exact(), "errors": {"type": "integer"}}});
-        let mut input = object_of(ctx.joint_names.iter().flatten().cloned(), motor);
-        input["properties"]["t_s"] = exact();
-        input["properties"]["tick"] = json!({"type": "integer"});
-        input["properties"]["overrun_streak"] = json!({"type": "integer"});
-        input["properties"]["operator"] = json!({"type": ["string", "null"]});
-        input["properties"]["imu"] = json!({"type": ["object", "null"], "properties": {
-            "t_s": exact(), "gyro_pitch_rad_s": exact(), "accel_x_mps2": exact(),
-            "accel_z_mps2": exact()}});
-        let joint_command = json!({"type": "object", "properties": {
-            "mode": {"type": "string", "enum": ["pd", "damping"]}, "q_des_rad": exact(),
-            "dq_des_rad_s": exact(), "kp_nm_per_rad": exact(), "kd_nm_s_per_rad": exact(),
-            "tau_ff_nm": exact()}});
-        let mut command = object_of(ctx.joint_names.iter().flatten().cloned(), joint_command);
-        command["properties"]["t_s"] = exact();
-        command["properties"]["tick"] = json!({"type": "integer"});
-        command["properties"]["state"] = json!({"type": "string"});
-        let mut add = |topic: &str, schema_name: &str, schema: &Value| {
-            let text = serde_json::to_vec(schema).unwrap_or_default();
-            let sid = w.add_schema(schema_name, "jsonschema", &text)?;
-            let meta = BTreeMap::from([(
-                SCHEMA_VERSION_KEY.to_string(),
-                LOG_SCHEMA_VERSION.to_string(),
-            )]);
-            w.add_channel(sid, topic, "json", &meta)
-        };
+        let meta = BTreeMap::from([(
+            SCHEMA_VERSION_KEY.to_string(),
+            LOG_SCHEMA_VERSION.to_string(),
+        )]);
+        let mut ids = Vec::with_capacity(CHANNELS.len());
+        for c in super::channels::channel_schemas(&ctx.joint_names, &ctx.output_names) {
+            let text = serde_json::to_vec(&c.schema).unwrap_or_default();
+            let sid = w.add_schema(c.schema_name, "jsonschema", &text)?;
+            ids.push(w.add_channel(sid, c.topic, "json", &meta)?);
+        }
+        let scene = super::scene::add_scene_channels(w, &meta)?;
         Ok(Self {
-            joints: add(CHANNELS[0], "adam.Joints", &joints)?,
-            hzd: add(CHANNELS[1], "adam.Hzd", &hzd)?,
-            estimator: add(CHANNELS[2], "adam.Estimator", &estimator)?,
-            state: add(CHANNELS[3], "adam.State", &state)?,
-            safety: add(CHANNELS[4], "adam.SafetyTrip", &safety)?,
-            transitions: add(CHANNELS[5], "adam.Transition", &transitions)?,
-            input: add(CHANNELS[6], "adam.TickInput", &input)?,
-            command: add(CHANNELS[7], "adam.TickCommand", &command)?,
-            speed: add(CHANNELS[8], "adam.Speed", &super::speed_log::speed_schema())?,
-            can: add(CHANNELS[9], "adam.CanFrame", &super::frames::frame_schema())?,
+            joints: ids[0],
+            hzd: ids[1],
+            estimator: ids[2],
+            state: ids[3],
+            safety: ids[4],
+            transitions: ids[5],
+            input: ids[6],
+            command: ids[7],
+            speed: ids[8],
+            can: ids[9],
+            scene,
         })
     }
 }
@@ -493,19 +438,12 @@ struct RecordWriter<W: std::io::Write + std::io::Seek> {
     ids: Channels,
     context: LogContext,
     seq: u32,
+    scene: super::scene::SceneLog,
 }
 
 /// Seconds to MCAP nanoseconds (negative times clamp to 0).
 fn ns(t_s: f64) -> u64 {
     (t_s.max(0.0) * 1e9).round() as u64
-}
-
-fn side_name(stance: u32) -> &'static str {
-    if stance == 0 {
-        "left"
-    } else {
-        "right"
-    }
 }
 
 /// A float as JSON that reads back bit for bit: a number, or `"NaN"`, `"inf"`, `"-inf"`.
@@ -658,55 +596,20 @@ impl<W: std::io::Write + std::io::Seek> RecordWriter<W> {
         match record {
             LogRecord::Sample(s) => {
                 let t = s.t_s;
-                let mut joints = Map::new();
-                joints.insert("t_s".into(), json!(t));
-                for (slot, name) in self.context.joint_names.iter().enumerate() {
-                    let Some(name) = name else { continue };
-                    joints.insert(
-                        name.clone(),
-                        json!({
-                            "q_rad": s.q_rad[slot], "dq_rad_s": s.dq_rad_s[slot],
-                            "tau_nm": s.tau_nm[slot], "temperature_c": s.temperature_c[slot],
-                            "q_cmd_rad": s.q_cmd_rad[slot], "dq_cmd_rad_s": s.dq_cmd_rad_s[slot],
-                            "tau_cmd_nm": s.tau_cmd_nm[slot],
-                            "fresh": s.fresh_mask & (1 << slot) != 0,
-                        }),
-                    );
-                }
-                let outputs = |v: &[f64; OUTPUTS]| -> Value {
-                    let m: Map<String, Value> = self
-                        .context
-                        .output_names
-                        .iter()
-                        .zip(v)
-                        .map(|(n, x)| (n.clone(), json!(x)))
-                        .collect();
-                    Value::Object(m)
-                };
-                let hzd = json!({
-                    "t_s": t, "phase": s.phase, "phase_rate_per_s": s.phase_rate_per_s,
-                    "stance": side_name(s.stance), "steps": s.steps,
-                    "swing_foot_height_m": s.swing_foot_height_m,
-                    "y_des_rad": outputs(&s.y_des_rad), "dy_des_rad_s": outputs(&s.dy_des_rad_s),
-                    "y_act_rad": outputs(&s.y_act_rad),
-                });
-                let estimator = json!({
-                    "t_s": t, "pitch_rad": s.pitch_rad, "pitch_rate_rad_s": s.pitch_rate_rad_s,
-                    "gyro_bias_rad_s": s.gyro_bias_rad_s, "imu_gyro_rad_s": s.imu_gyro_rad_s,
-                    "imu_accel_x_mps2": s.imu_accel_x_mps2, "imu_accel_z_mps2": s.imu_accel_z_mps2,
-                });
-                let state = json!({
-                    "t_s": t, "tick": s.tick, "state": s.control_state().name(),
-                    "state_code": s.state, "trip_code": s.trip_code, "overruns": s.overruns,
-                    "overrun_streak": s.overrun_streak,
-                    "tick_compute_us": s.tick_compute_ns as f64 * 1e-3,
-                });
+                let [joints, hzd, estimator, state] = super::channels::sample_messages(
+                    s,
+                    &self.context.joint_names,
+                    &self.context.output_names,
+                );
                 let ids = self.ids;
-                self.put(ids.joints, t, &Value::Object(joints))?;
+                self.put(ids.joints, t, &joints)?;
                 self.put(ids.hzd, t, &hzd)?;
                 self.put(ids.estimator, t, &estimator)?;
                 self.put(ids.state, t, &state)?;
-                Ok(4)
+                let scene = self.context.scene.as_ref();
+                Ok(4 + self
+                    .scene
+                    .write(&mut self.writer, scene, &ids.scene, s, &mut self.seq)?)
             }
             LogRecord::Tick(record) => {
                 let t = record.input.t_s;
@@ -799,7 +702,10 @@ mod tests {
         let stats = logger.finish().unwrap();
         assert_eq!(stats.dropped, 0);
         assert_eq!(stats.records, n + 2);
-        assert_eq!(stats.messages, 4 * n + 2);
+        // 4 per sample, a transition, a trip; and the scene: /tf every 10 ms of the 0.5 s,
+        // /scene and /robot_description at the first sample.
+        let tf = n / 10;
+        assert_eq!(stats.messages, 4 * n + 2 + tf + 2);
 
         let bytes = std::fs::read(&path).unwrap();
         let mut counts: HashMap<String, u64> = HashMap::new();
@@ -823,6 +729,8 @@ mod tests {
         }
         assert_eq!(counts["/safety"], 1);
         assert_eq!(counts["/transitions"], 1);
+        assert_eq!(counts["/tf"], tf);
+        assert_eq!((counts["/scene"], counts["/robot_description"]), (1, 1));
         assert!((knee[123] - 0.123).abs() < 1e-12);
         let trip = trip.unwrap();
         assert_eq!(trip["reason"], "fall");

@@ -71,6 +71,10 @@ pub struct StateSample {
     pub imu_accel_x_mps2: f64,
     /// Raw accelerometer z, m/s².
     pub imu_accel_z_mps2: f64,
+    /// The simulator's true torso pitch, rad (NaN on hardware): the live view's second tree.
+    pub true_pitch_rad: f64,
+    /// The simulator's true position on the belt, + forward of its centre, m (NaN on hardware).
+    pub true_belt_position_m: f64,
 }
 
 impl Default for StateSample {
@@ -105,6 +109,8 @@ impl Default for StateSample {
             imu_gyro_rad_s: 0.0,
             imu_accel_x_mps2: 0.0,
             imu_accel_z_mps2: 0.0,
+            true_pitch_rad: f64::NAN,
+            true_belt_position_m: f64::NAN,
         }
     }
 }
@@ -199,6 +205,52 @@ pub fn iceoryx2_node() -> std::result::Result<
     iceoryx2::prelude::NodeBuilder::new().create::<iceoryx2::prelude::ipc::Service>()
 }
 
+/// The state service of the loop's samples (an iceoryx2 publish-subscribe port factory).
+#[cfg(feature = "iceoryx2")]
+pub type StateService = iceoryx2::service::port_factory::publish_subscribe::PortFactory<
+    iceoryx2::prelude::ipc::Service,
+    StateSample,
+    (),
+>;
+
+/// A telemetry error of the service `name`.
+pub fn telemetry_error(name: &str, message: String) -> RuntimeError {
+    RuntimeError::Telemetry {
+        service: name.to_string(),
+        message,
+    }
+}
+
+/// Opens the state service `name`, or creates it if neither the loop nor a viewer has yet
+/// (both ask for [`SUBSCRIBER_BUFFER`]): the node that owns it, and the service. Keep the node
+/// alive as long as the service, and both longer than their ports.
+#[cfg(feature = "iceoryx2")]
+pub fn open_state_service(
+    name: &str,
+) -> Result<(
+    iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
+    StateService,
+)> {
+    use iceoryx2::prelude::*;
+    let node =
+        iceoryx2_node().map_err(|e| telemetry_error(name, format!("cannot create a node: {e}")))?;
+    let service_name: ServiceName = name
+        .try_into()
+        .map_err(|e| telemetry_error(name, format!("not a valid service name: {e}")))?;
+    let service = node
+        .service_builder(&service_name)
+        .publish_subscribe::<StateSample>()
+        .subscriber_max_buffer_size(SUBSCRIBER_BUFFER)
+        .open_or_create()
+        .map_err(|e| telemetry_error(name, format!("cannot open the service: {e}")))?;
+    Ok((node, service))
+}
+
+/// Samples a subscriber of the state service may hold before the oldest is overwritten (the
+/// publisher never waits): 0.5 s at 1 kHz. Publisher and subscribers ask for the same, so
+/// whichever starts first creates a service the other can open.
+pub const SUBSCRIBER_BUFFER: usize = 512;
+
 /// Publishes a [`StateSample`] every tick over iceoryx2 (zero-copy shared memory).
 ///
 /// iceoryx2 ports are not `Send`: create the publisher on the thread that uses it (the loop
@@ -208,11 +260,7 @@ pub struct Publisher {
     // Field order = drop order: the port before its service before its node.
     publisher:
         iceoryx2::port::publisher::Publisher<iceoryx2::prelude::ipc::Service, StateSample, ()>,
-    _service: iceoryx2::service::port_factory::publish_subscribe::PortFactory<
-        iceoryx2::prelude::ipc::Service,
-        StateSample,
-        (),
-    >,
+    _service: StateService,
     _node: iceoryx2::node::Node<iceoryx2::prelude::ipc::Service>,
     failures: u64,
 }
@@ -221,24 +269,11 @@ pub struct Publisher {
 impl Publisher {
     /// Open or create the service `name` and a publisher on it.
     pub fn new(name: &str) -> Result<Self> {
-        use iceoryx2::prelude::*;
-        let err = |message: String| RuntimeError::Telemetry {
-            service: name.to_string(),
-            message,
-        };
-        let node = iceoryx2_node().map_err(|e| err(format!("cannot create a node: {e}")))?;
-        let service_name: ServiceName = name
-            .try_into()
-            .map_err(|e| err(format!("not a valid service name: {e}")))?;
-        let service = node
-            .service_builder(&service_name)
-            .publish_subscribe::<StateSample>()
-            .open_or_create()
-            .map_err(|e| err(format!("cannot open the service: {e}")))?;
+        let (node, service) = open_state_service(name)?;
         let publisher = service
             .publisher_builder()
             .create()
-            .map_err(|e| err(format!("cannot create a publisher: {e}")))?;
+            .map_err(|e| telemetry_error(name, format!("cannot create a publisher: {e}")))?;
         Ok(Self {
             publisher,
             _service: service,
@@ -298,6 +333,8 @@ mod tests {
             t_s: 0.042,
             state: ControlState::Walk as u32,
             phase: 0.37,
+            true_pitch_rad: 0.01,
+            true_belt_position_m: -0.1,
             ..StateSample::default()
         };
         sample.q_rad[3] = 1.25;

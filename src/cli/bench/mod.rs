@@ -1,14 +1,17 @@
 //! `adam bench plan`, `adam bench check` and `adam bench library`: the plan, the gait check and
 //! the gait library repeated, a row per run and the medians; `adam bench treadmill`
-//! ([`mod@treadmill`]): the treadmill scenarios of issue #29 over seeds, a table per scenario.
+//! ([`mod@treadmill`]): the treadmill scenarios of issue #29 over seeds, a table per scenario;
+//! `adam bench live` ([`mod@live`]): loop jitter and tick time with 0 and N live clients.
 
 mod library;
+mod live;
 mod report;
 mod treadmill;
 
-pub(crate) use treadmill::treadmill;
+pub(crate) use treadmill::{matrix_runs, seeds_or_default, tables as treadmill_tables, treadmill};
 
 pub(crate) use library::library;
+pub(crate) use live::live;
 
 use crate::cli::plan::{CommandTimes, PhaseSeconds};
 use crate::cli::shipped;
@@ -37,6 +40,10 @@ pub(crate) enum BenchWhat {
         #[arg(long, value_parser = crate::cli::plan::parse_backend)]
         backend: Option<planner::config::SolverBackend>,
     },
+    /// The loop's wake-up jitter and tick time in real time on the simulated robot, publishing
+    /// to `adam live` (its own process), with 0 and with 3 Foxglove clients subscribed to every
+    /// channel (`--clients 0,3`): a row per client count.
+    Live(live::LiveBenchArgs),
     /// Plan the gait library of `adam plan library` `--runs` times (nothing written): wall and
     /// CPU time per run, and the medians.
     Library(library::LibraryBenchArgs),

@@ -1,15 +1,15 @@
 //! `adam bench treadmill`: issue #29's treadmill scenarios (`runtime::sim::scenarios`) over
 //! seeds, every run in parallel on the machine's cores (rayon), one table per scenario: (a)
 //! constant belts, (b) a belt step up and back, (c) pushes at five points of the step and the
-//! largest push ridden through each way (a bisection), (d) start and restart.
+//! largest push ridden through each way (a bisection), (d) start and restart. The matrix's runs
+//! ([`matrix`]) and its tables ([`tables`]) are also a treadmill sweep plan's tasks and report
+//! (`adam sweep`); only the bisection is the bench's alone.
 
 use anyhow::{bail, Result};
 use rayon::prelude::*;
-use runtime::sim::run::{walk, SimWalkOptions, SimWalkReport};
+use runtime::sim::matrix::{self, Run, RunSummary};
 use runtime::sim::scenarios::{
-    belt_steps, constant_belt, max_abs_position_after_m, max_abs_position_m, outcome,
-    push_at_phase, rides_through, speed_ratio_after, start_restart, steps_to_match, Restart,
-    BELT_SPEEDS_MPS, PUSH_DURATION_S, PUSH_FORCES_N, PUSH_PHASES, SETTLE_S,
+    Restart, BELT_SPEEDS_MPS, PUSH_DURATION_S, PUSH_FORCES_N, PUSH_PHASES, SETTLE_S,
 };
 use std::fmt::Write as _;
 
@@ -43,14 +43,36 @@ const QUICK: Sizes = Sizes {
 /// Largest push magnitude the bisection tries, N.
 const PUSH_CEILING_N: f64 = 160.0;
 
-/// One walk, its failure to start as an error.
-fn run(setup: &runtime::Setup, options: &SimWalkOptions) -> Result<SimWalkReport> {
-    Ok(walk(setup, options)?)
-}
-
-/// Runs every job in parallel, in order.
-fn run_all(setup: &runtime::Setup, jobs: &[SimWalkOptions]) -> Result<Vec<SimWalkReport>> {
-    jobs.par_iter().map(|o| run(setup, o)).collect()
+/// The treadmill matrix of `seeds` in table order: (a) belt speeds × seeds, (b) belt steps ×
+/// seeds, (c) push forces × points × seeds, (d) restart cases × seeds. The runs of `adam bench
+/// treadmill` and the tasks of a treadmill sweep plan.
+pub(crate) fn matrix_runs(seeds: &[u64], quick: bool) -> Vec<Run> {
+    let sizes = if quick { QUICK } else { FULL };
+    let mut runs = Vec::new();
+    for &speed_mps in &BELT_SPEEDS_MPS {
+        runs.extend(seeds.iter().map(|&seed| Run::ConstantBelt {
+            speed_mps,
+            duration_s: sizes.constant_s,
+            seed,
+        }));
+    }
+    runs.extend(seeds.iter().map(|&seed| Run::BeltSteps {
+        duration_s: sizes.steps_s,
+        seed,
+    }));
+    for &force_x_n in &PUSH_FORCES_N {
+        for &phase in sizes.phases {
+            runs.extend(seeds.iter().map(|&seed| Run::Push {
+                force_x_n,
+                phase,
+                seed,
+            }));
+        }
+    }
+    for case in Restart::ALL {
+        runs.extend(seeds.iter().map(|&seed| Run::Restart { case, seed }));
+    }
+    runs
 }
 
 /// `a of b`, e.g. `0/5`.
@@ -64,13 +86,12 @@ fn metres(v: Option<f64>) -> String {
 }
 
 /// Distinct outcomes of a set of runs with how many, e.g. `ok ×3, fall: off the back of the belt ×2`.
-fn outcomes(reports: &[&SimWalkReport]) -> String {
-    let mut seen: Vec<(String, usize)> = Vec::new();
-    for r in reports {
-        let o = outcome(r);
-        match seen.iter_mut().find(|(s, _)| *s == o) {
+fn outcomes(summaries: &[&RunSummary]) -> String {
+    let mut seen: Vec<(&str, usize)> = Vec::new();
+    for r in summaries {
+        match seen.iter_mut().find(|(s, _)| *s == r.outcome) {
             Some((_, n)) => *n += 1,
-            None => seen.push((o, 1)),
+            None => seen.push((&r.outcome, 1)),
         }
     }
     seen.iter()
@@ -79,17 +100,31 @@ fn outcomes(reports: &[&SimWalkReport]) -> String {
         .join(", ")
 }
 
-/// (a) Constant belts.
-fn constant(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut String) -> Result<()> {
-    let jobs: Vec<SimWalkOptions> = BELT_SPEEDS_MPS
-        .iter()
-        .flat_map(|&v| {
-            seeds
-                .iter()
-                .map(move |&s| constant_belt(v, sizes.constant_s, s))
-        })
-        .collect();
-    let reports = run_all(setup, &jobs)?;
+/// The summaries of the runs `pick` selects (a run without a summary, e.g. a sweep task with
+/// no result yet, is left out: the counts say of how many).
+fn select<'a>(
+    runs: &[Run],
+    summaries: &'a [Option<RunSummary>],
+    pick: impl Fn(&Run) -> bool,
+) -> Vec<&'a RunSummary> {
+    runs.iter()
+        .zip(summaries)
+        .filter(|(r, _)| pick(r))
+        .filter_map(|(_, s)| s.as_ref())
+        .collect()
+}
+
+/// The tables of `adam bench treadmill` (a)–(d) from the matrix's `runs` and their
+/// `summaries` (`None`: no result), as `adam bench treadmill` prints them and `adam sweep
+/// collect` writes them.
+pub(crate) fn tables(
+    seeds: &[u64],
+    quick: bool,
+    runs: &[Run],
+    summaries: &[Option<RunSummary>],
+) -> Result<String> {
+    let sizes = if quick { QUICK } else { FULL };
+    let mut out = String::new();
     writeln!(
         out,
         "\n(a) belt at a constant speed, {:.0} s, seeds {seeds:?}; figures after the first {SETTLE_S:.0} s, up to any fall",
@@ -100,19 +135,21 @@ fn constant(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut Strin
         "{:>9} {:>6} {:>6} {:>18} {:>22}  outcomes",
         "belt m/s", "falls", "trips", "max |position| m", "walking/belt % (mean)"
     )?;
-    for (k, &v) in BELT_SPEEDS_MPS.iter().enumerate() {
-        let rs: Vec<&SimWalkReport> = reports[k * seeds.len()..(k + 1) * seeds.len()]
-            .iter()
-            .collect();
-        let falls = rs.iter().filter(|r| r.fall.is_some()).count();
-        let trips = rs.iter().filter(|r| r.summary.trip.is_some()).count();
+    for &v in &BELT_SPEEDS_MPS {
+        let rs = select(
+            runs,
+            summaries,
+            |r| matches!(r, Run::ConstantBelt { speed_mps, .. } if *speed_mps == v),
+        );
+        let falls = rs.iter().filter(|r| r.fell).count();
+        let trips = rs.iter().filter(|r| r.tripped).count();
         let position = rs
             .iter()
-            .filter_map(|r| max_abs_position_after_m(r, SETTLE_S))
+            .filter_map(|r| r.max_abs_position_after_settle_m)
             .reduce(f64::max);
         let ratios: Vec<f64> = rs
             .iter()
-            .filter_map(|r| speed_ratio_after(&r.step_records, SETTLE_S))
+            .filter_map(|r| r.speed_ratio_after_settle)
             .collect();
         let ratio = if ratios.is_empty() {
             "—".to_string()
@@ -133,18 +170,7 @@ fn constant(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut Strin
             outcomes(&rs)
         )?;
     }
-    Ok(())
-}
-
-/// (b) A belt step up and back.
-fn belt_step(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut String) -> Result<()> {
-    let jobs: Vec<(SimWalkOptions, [f64; 2])> = seeds
-        .iter()
-        .map(|&s| belt_steps(sizes.steps_s, s))
-        .collect();
-    let options: Vec<SimWalkOptions> = jobs.iter().map(|(o, _)| o.clone()).collect();
-    let reports = run_all(setup, &options)?;
-    let [t1, t2] = jobs[0].1;
+    let [t1, t2] = [sizes.steps_s / 3.0, 2.0 * sizes.steps_s / 3.0];
     writeln!(
         out,
         "\n(b) belt 0.20 → 0.30 m/s at {t1:.0} s and back at {t2:.0} s (ramps of 0.5 m/s²), {:.0} s: steps until the walk stays within 0.05 m/s of the belt",
@@ -156,28 +182,81 @@ fn belt_step(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut Stri
         "seed", "steps ↑", "steps ↓", "max |position| m"
     )?;
     let steps = |n: Option<usize>| n.map_or_else(|| "never".into(), |n| n.to_string());
-    for (seed, r) in seeds.iter().zip(&reports) {
+    for (run, s) in runs.iter().zip(summaries) {
+        if let (Run::BeltSteps { seed, .. }, Some(s)) = (run, s) {
+            let [up, down] = s.steps_to_match.unwrap_or([None, None]);
+            writeln!(
+                out,
+                "{seed:>5} {:>12} {:>12} {:>17.3}  {}",
+                steps(up),
+                steps(down),
+                s.max_abs_position_m,
+                s.outcome
+            )?;
+        }
+    }
+    writeln!(
+        out,
+        "\n(c) pushes of {PUSH_DURATION_S} s on the belt at 0.25 m/s landing at a phase of the step: runs that ride through (no trip, no stall, no fall) of {}",
+        seeds.len()
+    )?;
+    let mut header = format!("{:>7}", "push");
+    for p in sizes.phases {
+        write!(header, " {:>6}", format!("{:.0} %", 100.0 * p))?;
+    }
+    writeln!(out, "{header}  outcomes")?;
+    for &f in &PUSH_FORCES_N {
+        let mut row = format!("{:>5} N", format!("{f:+.0}"));
+        for &p in sizes.phases {
+            let rs = select(
+                runs,
+                summaries,
+                |r| matches!(r, Run::Push { force_x_n, phase, .. } if *force_x_n == f && *phase == p),
+            );
+            let ok = rs.iter().filter(|r| r.rides_through).count();
+            write!(row, " {:>6}", count(ok, rs.len()))?;
+        }
+        let all = select(
+            runs,
+            summaries,
+            |r| matches!(r, Run::Push { force_x_n, .. } if *force_x_n == f),
+        );
+        writeln!(out, "{row}  {}", outcomes(&all))?;
+    }
+    writeln!(
+        out,
+        "\n(d) start and restart (from Stand: Start at 0 s, the controller's ramp to Stand; 20 s)"
+    )?;
+    writeln!(out, "{:<38} {:>14}  outcomes", "case", "no trip/fall")?;
+    for c in Restart::ALL {
+        let rs = select(
+            runs,
+            summaries,
+            |r| matches!(r, Run::Restart { case, .. } if *case == c),
+        );
+        let ok = rs.iter().filter(|r| r.rides_through).count();
         writeln!(
             out,
-            "{seed:>5} {:>12} {:>12} {:>17.3}  {}",
-            steps(steps_to_match(&r.step_records, t1, t2)),
-            steps(steps_to_match(&r.step_records, t2, sizes.steps_s)),
-            max_abs_position_m(r),
-            outcome(r)
+            "{:<38} {:>14}  {}",
+            c.name(),
+            count(ok, rs.len()),
+            outcomes(&rs)
         )?;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// Whether a push of `force_x_n` rides through at every point of `phases` for `seed`.
 fn survives(setup: &runtime::Setup, force_x_n: f64, phases: &[f64], seed: u64) -> Result<bool> {
     let results: Result<Vec<bool>> = phases
         .par_iter()
-        .map(|&p| {
-            Ok(rides_through(&run(
-                setup,
-                &push_at_phase(force_x_n, p, seed),
-            )?))
+        .map(|&phase| {
+            let push = Run::Push {
+                force_x_n,
+                phase,
+                seed,
+            };
+            Ok(matrix::run(setup, &push)?.rides_through)
         })
         .collect();
     Ok(results?.into_iter().all(|ok| ok))
@@ -201,46 +280,17 @@ fn largest_push(setup: &runtime::Setup, sign: f64, sizes: Sizes, seed: u64) -> R
     Ok((lo, hi))
 }
 
-/// (c) Pushes at points of the step.
-fn pushes(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut String) -> Result<()> {
-    let jobs: Vec<SimWalkOptions> = PUSH_FORCES_N
-        .iter()
-        .flat_map(|&f| {
-            sizes
-                .phases
-                .iter()
-                .flat_map(move |&p| seeds.iter().map(move |&s| push_at_phase(f, p, s)))
-        })
-        .collect();
-    let reports = run_all(setup, &jobs)?;
-    writeln!(
-        out,
-        "\n(c) pushes of {PUSH_DURATION_S} s on the belt at 0.25 m/s landing at a phase of the step: runs that ride through (no trip, no stall, no fall) of {}",
-        seeds.len()
-    )?;
-    let mut header = format!("{:>7}", "push");
-    for p in sizes.phases {
-        write!(header, " {:>6}", format!("{:.0} %", 100.0 * p))?;
-    }
-    writeln!(out, "{header}  outcomes")?;
-    let per_force = sizes.phases.len() * seeds.len();
-    for (k, f) in PUSH_FORCES_N.iter().enumerate() {
-        let mut row = format!("{:>5} N", format!("{f:+.0}"));
-        let rs = &reports[k * per_force..(k + 1) * per_force];
-        for chunk in rs.chunks(seeds.len()) {
-            let ok = chunk.iter().filter(|r| rides_through(r)).count();
-            write!(row, " {:>6}", count(ok, seeds.len()))?;
-        }
-        let all: Vec<&SimWalkReport> = rs.iter().collect();
-        writeln!(out, "{row}  {}", outcomes(&all))?;
-    }
-    let bisections: Vec<((f64, u64), (f64, f64))> = [-1.0, 1.0]
+/// The bisection lines of (c): the largest push ridden through each way, per seed (a search,
+/// one run after another: `adam bench treadmill` only, not a sweep's matrix).
+fn bisections(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes) -> Result<String> {
+    let found: Vec<((f64, u64), (f64, f64))> = [-1.0, 1.0]
         .into_par_iter()
         .flat_map(|sign| seeds.par_iter().map(move |&s| (sign, s)))
         .map(|(sign, s)| largest_push(setup, sign, sizes, s).map(|b| ((sign, s), b)))
         .collect::<Result<_>>()?;
+    let mut out = String::new();
     for (sign, way) in [(-1.0, "backward"), (1.0, "forward")] {
-        let cells: Vec<String> = bisections
+        let cells: Vec<String> = found
             .iter()
             .filter(|((s, _), _)| *s == sign)
             .map(|((_, seed), (lo, hi))| {
@@ -257,35 +307,22 @@ fn pushes(setup: &runtime::Setup, seeds: &[u64], sizes: Sizes, out: &mut String)
             cells.join("; ")
         )?;
     }
-    Ok(())
+    Ok(out)
 }
 
-/// (d) Start and restart.
-fn restarts(setup: &runtime::Setup, seeds: &[u64], out: &mut String) -> Result<()> {
-    let jobs: Vec<SimWalkOptions> = Restart::ALL
-        .iter()
-        .flat_map(|&c| seeds.iter().map(move |&s| start_restart(c, s)))
-        .collect();
-    let reports = run_all(setup, &jobs)?;
-    writeln!(
-        out,
-        "\n(d) start and restart (from Stand: Start at 0 s, the controller's ramp to Stand; 20 s)"
-    )?;
-    writeln!(out, "{:<38} {:>14}  outcomes", "case", "no trip/fall")?;
-    for (k, case) in Restart::ALL.iter().enumerate() {
-        let rs: Vec<&SimWalkReport> = reports[k * seeds.len()..(k + 1) * seeds.len()]
-            .iter()
-            .collect();
-        let ok = rs.iter().filter(|r| rides_through(r)).count();
-        writeln!(
-            out,
-            "{:<38} {:>14}  {}",
-            case.name(),
-            count(ok, rs.len()),
-            outcomes(&rs)
-        )?;
+/// The seeds of a treadmill matrix: those given (at least one), else 1–2 (`--quick`) or 1–5.
+pub(crate) fn seeds_or_default(seeds: Option<Vec<u64>>, quick: bool) -> Result<Vec<u64>> {
+    let seeds = seeds.unwrap_or_else(|| {
+        if quick {
+            vec![1, 2]
+        } else {
+            vec![1, 2, 3, 4, 5]
+        }
+    });
+    if seeds.is_empty() {
+        bail!("--seeds must name at least one seed");
     }
-    Ok(())
+    Ok(seeds)
 }
 
 /// `adam bench treadmill`: every scenario over `seeds`, printing each table as it is done,
@@ -297,16 +334,7 @@ pub(crate) fn treadmill(
     gait: &std::path::Path,
 ) -> Result<()> {
     let sizes = if quick { QUICK } else { FULL };
-    let seeds = seeds.unwrap_or_else(|| {
-        if quick {
-            vec![1, 2]
-        } else {
-            vec![1, 2, 3, 4, 5]
-        }
-    });
-    if seeds.is_empty() {
-        bail!("--seeds must name at least one seed");
-    }
+    let seeds = seeds_or_default(seeds, quick)?;
     let (config, gait) = (
         crate::cli::shipped::input(config),
         crate::cli::shipped::input(gait),
@@ -321,15 +349,14 @@ pub(crate) fn treadmill(
     );
     let wall = std::time::Instant::now();
     let cpu0 = cpu_time_s();
-    type Scenario = fn(&runtime::Setup, &[u64], Sizes, &mut String) -> Result<()>;
-    let scenarios: [Scenario; 4] = [constant, belt_step, pushes, |s, seeds, _, out| {
-        restarts(s, seeds, out)
-    }];
-    for scenario in scenarios {
-        let mut out = String::new();
-        scenario(&setup, &seeds, sizes, &mut out)?;
-        print!("{out}");
-    }
+    // Every run of the matrix at once (the tasks of a treadmill sweep plan, the same function).
+    let runs = matrix_runs(&seeds, quick);
+    let summaries: Vec<Option<RunSummary>> = runs
+        .par_iter()
+        .map(|r| Ok(Some(matrix::run(&setup, r)?)))
+        .collect::<Result<_>>()?;
+    print!("{}", tables(&seeds, quick, &runs, &summaries)?);
+    print!("{}", bisections(&setup, &seeds, sizes)?);
     println!(
         "\nwall {:.1} s, CPU {}",
         wall.elapsed().as_secs_f64(),

@@ -98,27 +98,7 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
     };
     let sweep_s = t2.elapsed().as_secs_f64();
     let optimum = [co.design.thigh_length_m, co.design.shin_length_m];
-    let costs: Vec<Option<f64>> = land
-        .points
-        .iter()
-        .map(|p| p.outcome.as_ref().ok().map(|o| o.objective))
-        .collect();
-    plots::landscape(
-        &out_dir.join("landscape"),
-        &plots::HeatMap {
-            thigh_m: &land.thigh_m,
-            shin_m: &land.shin_m,
-            cost: &costs,
-            cost_label: cost_label(&cfg),
-            optimum_m: Some((optimum[0], optimum[1])),
-            sweep_ends_m: &ends,
-        },
-    )?;
-    let csv_path = out_dir.join("landscape.csv");
-    std::fs::write(&csv_path, landscape_csv(&land))
-        .with_context(|| format!("writing {}", csv_path.display()))?;
     let mut md = String::new();
-    let fixed_s = land.wall_time_s;
     writeln!(
         md,
         "# Cost landscape ({n} × {n} fixed designs, {} start)\n",
@@ -127,22 +107,14 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
             StartArg::Neighbours => "neighbour",
         }
     )?;
-    writeln!(md, "{}", cost_table(&land))?;
-    let failed = land.points.iter().filter(|p| p.outcome.is_err()).count();
-    if let Some(best) = land.best() {
-        if let Ok(o) = &best.outcome {
-            writeln!(
-                md,
-                "Best grid point: thigh {:.4} m, shin {:.4} m, objective {:.5}, mechanical cost of transport {:.5} (step {:.4} m in {:.4} s).",
-                best.lengths_m[0], best.lengths_m[1], o.objective, o.cost_of_transport, o.step_length_m, o.step_duration_s
-            )?;
-        }
-    }
-    writeln!(
-        md,
-        "Failed grid solves: {failed}. Iterations over the grid: {}.\n",
-        land.iterations()
-    )?;
+    md.push_str(&write_grid_report(
+        &cfg,
+        &land,
+        out_dir,
+        Some((optimum[0], optimum[1])),
+        &ends,
+    )?);
+    let fixed_s = land.wall_time_s;
     let g = &co.planned.gait;
     writeln!(
         md,
@@ -190,6 +162,57 @@ pub(crate) fn landscape(args: &CodesignArgs, request: &LandscapeRequest<'_>) -> 
     Ok(())
 }
 
+/// The grid's part of the landscape's report, the same from `adam codesign landscape` and from
+/// `adam sweep collect` of a landscape plan: `landscape.csv`, the heat map
+/// (`landscape.png/.svg`, with the co-design optimum and the sweep's endpoints if given) and,
+/// returned, the cost table with the best point in Markdown. Nothing in it depends on time.
+pub(crate) fn write_grid_report(
+    cfg: &planner::config::PlannerConfig,
+    land: &Landscape,
+    out_dir: &Path,
+    optimum_m: Option<(f64, f64)>,
+    sweep_ends_m: &[(f64, f64)],
+) -> Result<String> {
+    std::fs::create_dir_all(out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
+    let costs: Vec<Option<f64>> = land
+        .points
+        .iter()
+        .map(|p| p.outcome.as_ref().ok().map(|o| o.objective))
+        .collect();
+    plots::landscape(
+        &out_dir.join("landscape"),
+        &plots::HeatMap {
+            thigh_m: &land.thigh_m,
+            shin_m: &land.shin_m,
+            cost: &costs,
+            cost_label: cost_label(cfg),
+            optimum_m,
+            sweep_ends_m,
+        },
+    )?;
+    let csv_path = out_dir.join("landscape.csv");
+    std::fs::write(&csv_path, landscape_csv(land))
+        .with_context(|| format!("writing {}", csv_path.display()))?;
+    let mut md = String::new();
+    writeln!(md, "{}", cost_table(land))?;
+    let failed = land.points.iter().filter(|p| p.outcome.is_err()).count();
+    if let Some(best) = land.best() {
+        if let Ok(o) = &best.outcome {
+            writeln!(
+                md,
+                "Best grid point: thigh {:.4} m, shin {:.4} m, objective {:.5}, mechanical cost of transport {:.5} (step {:.4} m in {:.4} s).",
+                best.lengths_m[0], best.lengths_m[1], o.objective, o.cost_of_transport, o.step_length_m, o.step_duration_s
+            )?;
+        }
+    }
+    writeln!(
+        md,
+        "Failed grid solves: {failed}. Iterations over the grid: {}.\n",
+        land.iterations()
+    )?;
+    Ok(md)
+}
+
 fn progress(n: usize, what: &str) -> Result<indicatif::ProgressBar> {
     let bar = indicatif::ProgressBar::new(n as u64);
     bar.set_style(
@@ -204,25 +227,24 @@ fn progress(n: usize, what: &str) -> Result<indicatif::ProgressBar> {
 /// Every grid point: lengths, gait figures, iterations, or the error.
 fn landscape_csv(land: &Landscape) -> String {
     let mut s = String::from(
-        "thigh_m,shin_m,cost_of_transport,step_length_m,step_duration_s,speed_mps,iterations,solve_time_s,from_neighbour,error\n",
+        "thigh_m,shin_m,cost_of_transport,step_length_m,step_duration_s,speed_mps,iterations,from_neighbour,error\n",
     );
     for p in &land.points {
         let [a, b] = p.lengths_m;
         let _ = match &p.outcome {
             Ok(o) => writeln!(
                 s,
-                "{a:.6},{b:.6},{:.8},{:.6},{:.6},{:.6},{},{:.4},{},",
+                "{a:.6},{b:.6},{:.8},{:.6},{:.6},{:.6},{},{},",
                 o.cost_of_transport,
                 o.step_length_m,
                 o.step_duration_s,
                 o.speed_mps,
                 o.iterations,
-                o.solve_time_s,
                 p.from_neighbour
             ),
             Err(e) => writeln!(
                 s,
-                "{a:.6},{b:.6},,,,,,,{},\"{}\"",
+                "{a:.6},{b:.6},,,,,,{},\"{}\"",
                 p.from_neighbour,
                 e.replace('"', "'")
             ),

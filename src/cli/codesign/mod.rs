@@ -5,17 +5,19 @@ mod audit;
 mod landscape;
 mod report;
 mod speeds;
+mod sweep;
+
+pub(crate) use sweep::write_sweep_report;
 
 pub(crate) use audit::audit;
-pub(crate) use landscape::{landscape, LandscapeRequest, StartArg};
+pub(crate) use landscape::{landscape, write_grid_report, LandscapeRequest, StartArg};
 
 use crate::cli::paths::{relative_path, writable, OUT_DIR};
 use crate::cli::plan::{gait_check, progress_printer};
-use crate::cli::plots;
 use crate::cli::shipped;
 use anyhow::{bail, Context, Result};
 use model::design::DesignLengths;
-use report::{CodesignReport, DesignRow, SweepCsv, SweepTable};
+use report::{CodesignReport, DesignRow};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `adam codesign`. `--config`, `--inertia` and `--force` are accepted before
@@ -99,13 +101,13 @@ pub(crate) enum CodesignStudy {
 
 /// `--inertia` (no doc on the values: clap would list them with it).
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
-enum InertiaArg {
+pub(crate) enum InertiaArg {
     Exact,
     Alg1,
 }
 
 /// The planner config with the CLI's inertia coupling, if given.
-fn codesign_config(
+pub(crate) fn codesign_config(
     config: &Path,
     inertia: Option<InertiaArg>,
 ) -> Result<planner::config::PlannerConfig> {
@@ -186,44 +188,32 @@ pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
 /// The paper's co-designed thigh and shin lengths, m (its Table II), a reference to compare with.
 const PAPER_OPTIMUM_M: [f64; 2] = [0.2425, 0.2515];
 
-/// `adam codesign sweep`: the convergence study; writes sweep.csv, table.md and the convergence
-/// figure, prints the table.
+/// `adam codesign sweep`: the convergence study, every run in this process (rayon) through
+/// the task function of a sweep plan's task (`planner::codesign::sweep_run`), then the report
+/// `adam sweep collect` writes from a plan's results ([`sweep::write_sweep_report`]).
 pub(crate) fn convergence_sweep(
     args: &CodesignArgs,
     grid: Option<usize>,
     out_dir: Option<&Path>,
 ) -> Result<()> {
-    use planner::codesign::{local_minima, mean_std, sweep, sweep_grid};
     let (config, inertia) = (&args.config, args.inertia);
     refuse_gait_outputs(args, "sweep")?;
     let mut cfg = codesign_config(config, inertia)?;
     if let Some(grid) = grid {
-        if !(1..=planner::config::MAX_SWEEP_GRID).contains(&grid) {
-            bail!(
-                "--grid {grid}: must be in 1..={}",
-                planner::config::MAX_SWEEP_GRID
-            );
-        }
+        check_sweep_grid(grid)?;
         cfg.codesign.sweep.grid = grid;
     }
     let grid = cfg.codesign.sweep.grid;
     let default_dir = Path::new(OUT_DIR).join("codesign-sweep");
     let out_dir = out_dir.unwrap_or(&default_dir);
-    let outputs = [
-        "sweep.csv",
-        "sweep.json",
-        "table.md",
-        "convergence.png",
-        "convergence.svg",
-    ];
-    for name in outputs {
+    for name in sweep::SWEEP_OUTPUTS {
         writable(&out_dir.join(name), args.force)?;
     }
     let start = std::time::Instant::now();
     let model_lengths = cfg.codesign.initial_m;
     let initial = warm_start(&cfg)?;
     let warm_s = start.elapsed().as_secs_f64();
-    let starts = sweep_grid(&cfg, grid);
+    let starts = planner::codesign::sweep_grid(&cfg, grid);
     let bar = indicatif::ProgressBar::new(starts.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -231,7 +221,7 @@ pub(crate) fn convergence_sweep(
         )
         .map_err(|e| anyhow::anyhow!("{e}"))?,
     );
-    let runs = sweep(&cfg, &initial, model_lengths, &starts, &|r| {
+    let runs = planner::codesign::sweep(&cfg, &initial, model_lengths, &starts, &|r| {
         bar.inc(1);
         if let Ok(o) = &r.outcome {
             bar.set_message(format!(
@@ -242,79 +232,34 @@ pub(crate) fn convergence_sweep(
     });
     bar.finish();
     let wall_s = start.elapsed().as_secs_f64();
-    let margin = cfg.codesign.sweep.local_minimum_margin;
-    let minima = local_minima(&runs, margin);
-    // CSV of every run.
-    let csv = SweepCsv {
-        runs: &runs,
-        local_minima: &minima,
-    }
-    .to_string();
-    let csv_path = out_dir.join("sweep.csv");
-    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
-    planner::codesign::save_sweep(&out_dir.join("sweep.json"), &runs)?;
-    // Table II: mean ± std over the runs that are not local minima.
-    let good: Vec<&planner::codesign::SweepOutcome> = runs
-        .iter()
-        .zip(&minima)
-        .filter(|(_, &lm)| !lm)
-        .filter_map(|(r, _)| r.outcome.as_ref().ok())
-        .collect();
-    let col = |f: fn(&planner::codesign::SweepOutcome) -> f64| {
-        mean_std(&good.iter().map(|o| f(o)).collect::<Vec<_>>())
-    };
-    let rows = [
-        ("thigh length (m)", col(|o| o.lengths_m[0]), "0.2425"),
-        ("shin length (m)", col(|o| o.lengths_m[1]), "0.2515"),
-        ("step length (m)", col(|o| o.step_length_m), "—"),
-        ("step duration (s)", col(|o| o.step_duration_s), "—"),
-        ("speed (m/s)", col(|o| o.speed_mps), "—"),
-        ("cost of transport", col(|o| o.cost_of_transport), "—"),
-        ("solve time (s)", col(|o| o.solve_time_s), "—"),
-    ];
-    let failed = runs.iter().filter(|r| r.outcome.is_err()).count();
-    let n_minima = minima.iter().filter(|&&m| m).count();
-    let md = SweepTable {
-        runs: runs.len(),
-        grid,
-        thigh_m: cfg.codesign.thigh_m,
-        shin_m: cfg.codesign.shin_m,
-        inertia: cfg.codesign.inertia,
-        warm_start_m: model_lengths,
-        warm_start_s: warm_s,
-        wall_s,
-        threads: rayon_threads(),
-        converged: good.len(),
-        local_minima: n_minima,
-        local_minimum_margin: margin,
-        failed,
-        rows: &rows,
-    }
-    .to_string();
-    let md_path = out_dir.join("table.md");
-    std::fs::write(&md_path, &md).with_context(|| format!("writing {}", md_path.display()))?;
+    let walls: Vec<f64> = runs.iter().map(|r| r.wall_time_s).collect();
+    let md = sweep::write_sweep_report(&cfg, &runs, &walls, out_dir)?;
     print!("\n{md}");
-    let arrows: Vec<plots::ConvergenceArrow> = runs
-        .iter()
-        .zip(&minima)
-        .filter_map(|(r, &lm)| {
-            r.outcome.as_ref().ok().map(|o| plots::ConvergenceArrow {
-                from_m: (r.initial_m[0], r.initial_m[1]),
-                to_m: (o.lengths_m[0], o.lengths_m[1]),
-                local_minimum: lm,
-            })
-        })
-        .collect();
-    plots::convergence(
-        &out_dir.join("convergence"),
-        &arrows,
-        [cfg.codesign.thigh_m, cfg.codesign.shin_m],
-        (PAPER_OPTIMUM_M[0], PAPER_OPTIMUM_M[1]),
-    )?;
     println!(
-        "\nwrote {0}/sweep.csv, {0}/sweep.json, {0}/table.md, {0}/convergence.png and {0}/convergence.svg",
-        out_dir.display()
+        "\nwarm start {warm_s:.1} s; {} runs {:.1} s wall in all on {} threads",
+        runs.len(),
+        wall_s,
+        rayon_threads()
     );
+    println!(
+        "wrote {}",
+        sweep::SWEEP_OUTPUTS
+            .iter()
+            .map(|n| out_dir.join(n).display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(())
+}
+
+/// Checks a `--grid` of the convergence study (n × n co-designs).
+pub(crate) fn check_sweep_grid(grid: usize) -> Result<()> {
+    if !(1..=planner::config::MAX_SWEEP_GRID).contains(&grid) {
+        bail!(
+            "--grid {grid}: must be in 1..={}",
+            planner::config::MAX_SWEEP_GRID
+        );
+    }
     Ok(())
 }
 
@@ -340,7 +285,7 @@ fn rayon_threads() -> usize {
 
 /// The gait planned at `[codesign] initial_m` on the robot GenerateModel makes there (with the
 /// A1 drives if `[codesign] a1_drives`, the tubes' `link_density_scale`): the warm start of the sweep and the landscape.
-pub(super) fn warm_start(
+pub(crate) fn warm_start(
     cfg: &planner::config::PlannerConfig,
 ) -> Result<planner::plan::PlannedGait> {
     let [thigh_m, shin_m] = cfg.codesign.initial_m;

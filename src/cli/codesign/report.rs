@@ -150,12 +150,13 @@ pub(crate) struct SweepCsv<'a> {
 
 impl fmt::Display for SweepCsv<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str("initial_thigh_m,initial_shin_m,status,thigh_m,shin_m,step_length_m,step_duration_s,speed_mps,cost_of_transport,iterations,solve_time_s,wall_time_s,local_minimum\n")?;
+        // What the runs found, nothing of their times (times.csv): the same from every path.
+        f.write_str("initial_thigh_m,initial_shin_m,status,thigh_m,shin_m,step_length_m,step_duration_s,speed_mps,cost_of_transport,iterations,local_minimum\n")?;
         for (r, &lm) in self.runs.iter().zip(self.local_minima) {
             match &r.outcome {
                 Ok(o) => writeln!(
                     f,
-                    "{},{},ok,{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},ok,{},{},{},{},{},{},{},{}",
                     r.initial_m[0],
                     r.initial_m[1],
                     o.lengths_m[0],
@@ -165,17 +166,14 @@ impl fmt::Display for SweepCsv<'_> {
                     o.speed_mps,
                     o.cost_of_transport,
                     o.iterations,
-                    o.solve_time_s,
-                    r.wall_time_s,
                     lm
                 )?,
                 Err(e) => writeln!(
                     f,
-                    "{},{},\"failed: {}\",,,,,,,,,{},",
+                    "{},{},\"failed: {}\",,,,,,,,",
                     r.initial_m[0],
                     r.initial_m[1],
                     e.replace('"', "'"),
-                    r.wall_time_s
                 )?,
             }
         }
@@ -187,8 +185,10 @@ impl fmt::Display for SweepCsv<'_> {
 /// ended, then mean and standard deviation of each quantity over the runs that reached the best
 /// design.
 pub(crate) struct SweepTable<'a> {
-    /// Runs in all.
+    /// Runs reported (fewer than planned while results are missing).
     pub(crate) runs: usize,
+    /// Runs planned (grid × grid).
+    pub(crate) planned_runs: usize,
     /// Grid size n (n × n runs).
     pub(crate) grid: usize,
     /// Bounds on the thigh length, m.
@@ -199,12 +199,6 @@ pub(crate) struct SweepTable<'a> {
     pub(crate) inertia: InertiaCoupling,
     /// Thigh and shin length of the warm start, m.
     pub(crate) warm_start_m: [f64; 2],
-    /// Time to plan the warm start, s.
-    pub(crate) warm_start_s: f64,
-    /// Wall time of the whole study, s.
-    pub(crate) wall_s: f64,
-    /// Threads the runs shared.
-    pub(crate) threads: usize,
     /// Runs that reached the best design.
     pub(crate) converged: usize,
     /// Runs that ended in a worse local minimum.
@@ -220,12 +214,14 @@ pub(crate) struct SweepTable<'a> {
 impl fmt::Display for SweepTable<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let grid = self.grid;
+        let missing = self.planned_runs.saturating_sub(self.runs);
         write!(
             f,
-            "# Co-design convergence study\n\n{} runs from a {grid}×{grid} grid of initial thigh/shin lengths over [{}, {}] × [{}, {}] m, {} inertia coupling; warm start planned at {}/{} m in {:.1} s; {:.1} s wall time in all on {} threads.\n\n{} runs converged to the best design, {} ended in a worse local minimum (cost of transport more than {:.0} % above the best), {} failed.\n\n| quantity | mean | std | paper |\n|---|---|---|---|\n",
+            "# Co-design convergence study\n\n{} runs from a {grid}×{grid} grid of initial thigh/shin lengths over [{}, {}] × [{}, {}] m, {} inertia coupling, each warm-started from the gait planned at {}/{} m.{}\n\n{} runs converged to the best design, {} ended in a worse local minimum (cost of transport more than {:.0} % above the best), {} failed.\n\n| quantity | mean | std | paper |\n|---|---|---|---|\n",
             self.runs, self.thigh_m[0], self.thigh_m[1], self.shin_m[0],
-            self.shin_m[1], coupling_name(self.inertia), self.warm_start_m[0], self.warm_start_m[1], self.warm_start_s,
-            self.wall_s, self.threads, self.converged, self.local_minima, self.local_minimum_margin * 100.0, self.failed
+            self.shin_m[1], coupling_name(self.inertia), self.warm_start_m[0], self.warm_start_m[1],
+            if missing > 0 { format!(" **{missing} of {} planned runs have no result yet.**", self.planned_runs) } else { String::new() },
+            self.converged, self.local_minima, self.local_minimum_margin * 100.0, self.failed
         )?;
         for (name, (m, sd), paper) in self.rows {
             writeln!(f, "| {name} | {m:.4} | {sd:.4} | {paper} |")?;
@@ -345,15 +341,19 @@ mod tests {
         .to_string();
         let lines: Vec<&str> = csv.lines().collect();
         assert!(lines[0].starts_with("initial_thigh_m,initial_shin_m,status,"));
-        assert!(lines[0].ends_with(",wall_time_s,local_minimum"));
+        assert!(lines[0].ends_with(",iterations,local_minimum"));
         assert_eq!(
             lines[1],
-            "0.15,0.15,ok,0.3487,0.35,0.15,0.9,0.1667,0.0139,128,4.8,4.9,true"
+            "0.15,0.15,ok,0.3487,0.35,0.15,0.9,0.1667,0.0139,128,true"
         );
         assert_eq!(
             lines[2],
-            "0.35,0.35,\"failed: the 'cost' stage failed\",,,,,,,,,1.5,"
+            "0.35,0.35,\"failed: the 'cost' stage failed\",,,,,,,,"
         );
+        // As many fields on every line (a failure's empty ones included).
+        let fields = |l: &str| l.split(',').count();
+        assert_eq!(fields(lines[0]), fields(lines[1]));
+        assert_eq!(fields(lines[0]), fields(lines[2]));
         assert_eq!(lines.len(), 3);
     }
 
@@ -361,18 +361,16 @@ mod tests {
     fn the_sweep_table_states_the_study_and_a_row_per_quantity() {
         let rows = [
             ("thigh length (m)", (0.34874, 0.0), "0.2425"),
-            ("solve time (s)", (4.6412, 0.1668), "—"),
+            ("solver iterations", (141.5, 3.5), "—"),
         ];
         let md = SweepTable {
-            runs: 4,
+            runs: 3,
+            planned_runs: 4,
             grid: 2,
             thigh_m: [0.15, 0.35],
             shin_m: [0.15, 0.35],
             inertia: InertiaCoupling::Exact,
             warm_start_m: [0.24, 0.25],
-            warm_start_s: 1.23,
-            wall_s: 10.7,
-            threads: 2,
             converged: 3,
             local_minima: 1,
             local_minimum_margin: 0.01,
@@ -380,10 +378,10 @@ mod tests {
             rows: &rows,
         }
         .to_string();
-        assert!(md.starts_with("# Co-design convergence study\n\n4 runs from a 2×2 grid"));
+        assert!(md.starts_with("# Co-design convergence study\n\n3 runs from a 2×2 grid"));
         assert!(md.contains(
-            "over [0.15, 0.35] × [0.15, 0.35] m, exact inertia coupling; warm start planned at \
-             0.24/0.25 m in 1.2 s; 10.7 s wall time in all on 2 threads."
+            "over [0.15, 0.35] × [0.15, 0.35] m, exact inertia coupling, each warm-started from \
+             the gait planned at 0.24/0.25 m. **1 of 4 planned runs have no result yet.**"
         ));
         assert!(md.contains(
             "3 runs converged to the best design, 1 ended in a worse local minimum (cost of \
@@ -391,7 +389,7 @@ mod tests {
         ));
         assert!(md.ends_with(
             "| quantity | mean | std | paper |\n|---|---|---|---|\n| thigh length (m) | 0.3487 | \
-             0.0000 | 0.2425 |\n| solve time (s) | 4.6412 | 0.1668 | — |\n"
+             0.0000 | 0.2425 |\n| solver iterations | 141.5000 | 3.5000 | — |\n"
         ));
     }
 }

@@ -95,6 +95,9 @@ pub(crate) struct RunArgs {
     /// A simulated motor mounted the other way round, by joint; repeatable (sim).
     #[arg(long)]
     sim_flip: Vec<String>,
+    /// The live view (sim: paces the run by the wall clock, as --real-time; can).
+    #[command(flatten)]
+    live: crate::cli::live::LiveFlags,
 }
 
 /// Arguments of `adam soak`.
@@ -128,6 +131,9 @@ pub(crate) struct DemoArgs {
     /// (default: the gait's speed).
     #[arg(long, allow_negative_numbers = true)]
     belt_speed: Option<f64>,
+    /// The live view: the demo then walks in real time (30 s of wall clock).
+    #[command(flatten)]
+    live: crate::cli::live::LiveFlags,
 }
 
 /// How a simulated run starts.
@@ -219,6 +225,7 @@ fn unused_flags(backend: Backend, args: &RunArgs) -> Vec<&'static str> {
             given("--imu", args.imu.is_some()),
             given("--sim-offsets", args.sim_offsets.is_some()),
             given("--sim-flip", !args.sim_flip.is_empty()),
+            given("--live", args.live.live.is_some()),
         ]
         .into_iter()
         .flatten()
@@ -417,6 +424,13 @@ pub(crate) fn demo(args: &DemoArgs) -> Result<()> {
     let mut options = runtime::sim::run::SimWalkOptions::new(30.0);
     options.belt_speed_mps = args.belt_speed;
     options.log_path = Some(timestamped_log_path());
+    if args.live.live.is_some() {
+        // Watched live: in real time, publishing every sample to the viewer.
+        options.real_time = true;
+        options.publish = true;
+        let _viewer = args.live.spawn(&config, &gait, false)?;
+        return sim_walk(&setup, &options);
+    }
     sim_walk(&setup, &options)
 }
 
@@ -459,6 +473,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         dry_run,
         sim_offsets,
         sim_flip,
+        live,
     } = args;
     let (gait, config) = (shipped::input(&gait), shipped::input(&config));
     let setup = runtime::Setup::load(&config, &gait)?;
@@ -474,6 +489,7 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
                 ("--faults", faults.is_some()),
                 ("--sim-offsets", sim_offsets.is_some()),
                 ("--sim-flip", !sim_flip.is_empty()),
+                ("--live", live.live.is_some()),
             ]
             .iter()
             .filter_map(|(f, set)| set.then_some(*f))
@@ -552,9 +568,12 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             options.script = script;
             options.log_path = log;
             options.seed = seed.unwrap_or(1);
-            options.real_time = real_time;
+            // The live view watches a run in real time, from the loop's published samples.
+            options.real_time = real_time || live.live.is_some();
+            options.publish = live.live.is_some();
             options.faults = faults.map(|(_, p)| p);
-            if real_time {
+            let _viewer = live.spawn(&config, &gait, false)?;
+            if options.real_time {
                 sim_walk_operated(&setup, &options, keyboard)
             } else {
                 sim_walk(&setup, &options)
@@ -603,6 +622,8 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
             let log = log.unwrap_or_else(timestamped_log_path);
             writable(&log, force)?;
             let backend = runtime::robot::open(&setup, &interfaces, imu.as_ref())?;
+            // The robot run always publishes its samples (`adam op`, the live view).
+            let _viewer = live.spawn(&config, &gait, true)?;
             let options = runtime::bringup::RobotRun {
                 duration_s: duration,
                 dry_run,
