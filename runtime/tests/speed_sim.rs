@@ -69,12 +69,12 @@ fn max_position_after(rows: &[SpeedRow], after_s: f64) -> f64 {
 }
 
 /// Belt at 0.25 m/s for 60 s: no fall, no trip, the walking speed over the belt within 2 % of
-/// the belt's (the acceptance threshold), and within ±0.20 m of the belt centre after 10 s,
-/// seeds 1–5 (measured with the step lever and σ from the belt speed, 2026-12-05: 0.165,
-/// 0.188, 0.187, 0.139, 0.154 m; with the law before it, on this fixture library: 0.146, 0.133,
-/// 0.129, 0.121, 0.125 m, while on the shipped library it stalled at 0.15 m/s and strayed
-/// 0.63 m at 0.20 m/s). The issue's ±0.10 m is not met yet: the library's gaits walk up to
-/// 30 % faster than planned in the simulator (0.25 → 0.29 m/s, 0.30 → 0.38 m/s open loop).
+/// the belt's (the acceptance threshold), and within ±0.16 m of the belt centre after 10 s,
+/// seeds 1–5 (measured with the step lever and the shipped gains, 2026-12-05: 0.147, 0.127,
+/// 0.110, 0.115, 0.123 m; before the lever: 0.146, 0.133, 0.129, 0.121, 0.125 m; with σ
+/// following the belt speed instead of the command, `command_share = 0`: 0.139–0.188 m). The
+/// issue's ±0.10 m is not met yet: the library's gaits walk up to 30 % faster than planned in
+/// the simulator (0.25 → 0.29 m/s, 0.30 → 0.38 m/s open loop).
 /// Gains tried with the law before the lever over seeds 1–5 (k_p, k_s, k_i, σ rate; worst
 /// |position|): its defaults 0.3, 0.5, 0.1, 0.02 m/s → 0.146 m; k_i 0.03 → 0.168; k_i 0.2 →
 /// 0.160; k_p 0.2 → 0.170; k_p 0.5, k_i 0.03 → 0.195; k_s 0.8 → 0.162; rate 0.03 → 0.135,
@@ -95,7 +95,7 @@ fn walks_a_belt_at_a_quarter_metre_per_second_at_the_belt_speed() {
             "seed {seed}: walked {:.4} m/s on a 0.25 m/s belt",
             report.speed_mps
         );
-        assert!(max_p < 0.20, "seed {seed}: {max_p:.3} m from the centre");
+        assert!(max_p < 0.16, "seed {seed}: {max_p:.3} m from the centre");
         // The estimate follows the truth (leg odometry drifts slowly).
         let last = rows.last().expect("rows");
         assert!(

@@ -15,7 +15,8 @@ use serde::{Deserialize, Serialize};
 /// v_cmd = clamp(b + offset − position_gain_per_s · p, library range)
 /// e_k   = v_cmd,k−1 − v̄_k          (speed error of the last stride against its command)
 /// I    += integral_gain · e_k                           (|I| ≤ integral_limit_mps)
-/// σ     = clamp(b + offset + speed_gain · e_k + I, library range,
+/// u     = b + offset
+/// σ     = clamp(u + command_share · (v_cmd − u) + speed_gain · e_k + I, library range,
 ///               σ_prev ± max_change_per_step_mps)          (the library gait of the next step)
 /// Δℓ    = clamp(step_length_gain_s · (v_k − v_cmd), ± max_step_offset_m)
 ///                                        (the next step lands Δℓ longer: the step lever)
@@ -25,8 +26,7 @@ use serde::{Deserialize, Serialize};
 pub struct SpeedConfig {
     /// Position loop: commanded speed per metre of position on the belt, (m/s)/m = 1/s.
     pub position_gain_per_s: f64,
-    /// Proportional gain of the step-to-step speed regulator (library speed per speed error;
-    /// 0 by default: the step lever is the proportional action).
+    /// Proportional gain of the step-to-step speed regulator (library speed per speed error).
     pub speed_gain: f64,
     /// Integral gain of the regulator, per step.
     pub integral_gain: f64,
@@ -42,6 +42,12 @@ pub struct SpeedConfig {
     /// The step lever's offset stays within ± this, m.
     #[serde(default = "default_max_step_offset_m")]
     pub max_step_offset_m: f64,
+    /// How much of the position loop's command the library speed follows: σ starts from
+    /// b + offset + command_share·(v_cmd − b − offset) (0: the operator's speed, the position
+    /// acting through the integral and the step lever only; 1, the default: v_cmd). Within
+    /// [0, 1]; `runtime::control::speed` compares the two ends.
+    #[serde(default = "default_command_share")]
+    pub command_share: f64,
     /// Where the position on the belt comes from: leg odometry (the belt speed set by the
     /// operator integrated against the measured steps).
     #[serde(default)]
@@ -65,12 +71,13 @@ impl Default for SpeedConfig {
     fn default() -> Self {
         Self {
             position_gain_per_s: 0.3,
-            speed_gain: 0.0,
-            integral_gain: 0.2,
+            speed_gain: 0.5,
+            integral_gain: 0.1,
             integral_limit_mps: 0.1,
             max_change_per_step_mps: 0.02,
             step_length_gain_s: default_step_length_gain_s(),
             max_step_offset_m: default_max_step_offset_m(),
+            command_share: 1.0,
             position_source: PositionSource::Odometry,
             library: None,
         }
@@ -83,6 +90,10 @@ fn default_step_length_gain_s() -> f64 {
 
 fn default_max_step_offset_m() -> f64 {
     0.04
+}
+
+fn default_command_share() -> f64 {
+    1.0
 }
 
 impl SpeedConfig {
@@ -109,6 +120,14 @@ impl SpeedConfig {
                 });
             }
         }
+        if !(0.0..=1.0).contains(&self.command_share) {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "speed.command_share".into(),
+                value: self.command_share.to_string(),
+                reason: "must be within [0, 1] (0: the library speed follows the operator's speed, 1: the position loop's command)".into(),
+            });
+        }
         // Gains that large overshoot every step (the loop is discrete: one update per step).
         for (field, v) in [
             ("speed.speed_gain", self.speed_gain),
@@ -125,5 +144,31 @@ impl SpeedConfig {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_command_share_outside_zero_to_one_is_refused_naming_the_field_and_value() {
+        for bad in [-0.1, 1.5, f64::NAN] {
+            let c = SpeedConfig {
+                command_share: bad,
+                ..SpeedConfig::default()
+            };
+            let e = c.validate("adam.toml").expect_err("refused").to_string();
+            assert!(e.contains("adam.toml"), "{e}");
+            assert!(e.contains("speed.command_share"), "{e}");
+            assert!(e.contains(&bad.to_string()), "{e}");
+        }
+        for good in [0.0, 0.5, 1.0] {
+            let c = SpeedConfig {
+                command_share: good,
+                ..SpeedConfig::default()
+            };
+            assert!(c.validate("adam.toml").is_ok());
+        }
     }
 }

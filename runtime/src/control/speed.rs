@@ -10,7 +10,8 @@
 //!           position on the belt p += d_k − belt travel over the step
 //!           v_cmd = clamp(b + o − k_p·p, library range)          (belt-position loop)
 //!           e_k = v_cmd,k−1 − v̄_k;  I = clamp(I + k_i·e_k, ±I_max)  (step-to-step integral)
-//!           σ = clamp(b + o + k_s·e_k + I, library range)        (the gait's speed)
+//!           σ = clamp(u + c·(v_cmd − u) + k_s·e_k + I, library range),  u = b + o
+//!                                                                 (the gait's speed)
 //!           Δℓ = clamp(k_ℓ·(v_k − v_cmd), ±Δℓ_max)               (the step lever)
 //!           next step = library interpolated at σ ─▶ Bézier α, θ⁺, θ⁻, T, feed-forward,
 //!                       braking step; landing Δℓ longer than its gait's step
@@ -47,19 +48,37 @@
 //! library is loaded and interpolated with it.
 //!
 //! # The law's gains
-//! One update per step: σ moves at most `max_change_per_step_mps` (0.02 m/s) per step; k_s = 0
-//! (the lever is the proportional action), k_i = 0.2 per step (the integral removes the
-//! planned-vs-walked bias of the library, up to I_max = 0.1 m/s), k_p = 0.3 /s, k_ℓ = 0.1 s
-//! (1 cm longer step per 0.1 m/s too fast), Δℓ_max = 0.04 m. σ follows the operator's speed
-//! b + o, not v_cmd: the position acts through the integral (its error is taken against
-//! v_cmd) and the lever. Tried over seeds 1–5, 30–60 s at 0.15–0.35 m/s (worst |position|
-//! after 10 s): k_ℓ 0.2 → 0.15 and 0.20 m/s stall in most seeds; k_ℓ 0.05 → 0.30 m at
-//! 0.25 m/s; k_ℓ 0.15 → 3 stalls of 5 at 0.15 m/s (but the belt step 5 of 5); k_i 0.3 → 0.30 m
-//! at 0.20 m/s; k_p 0.5 → 0.43 m at 0.25 m/s; σ following v_cmd (as before the lever) → 2 of
-//! 5 stall at 0.15–0.20 m/s; an integral on Δℓ (0.02–0.05 m per m/s and step) → steady long
-//! steps that stall at 0.25–0.30 m/s; a lever on the position (Δℓ += 0.03–0.1 m per m of
-//! position) → stalls at 0.15–0.25 m/s; the integral's excess beyond the library's slowest
-//! gait turned into Δℓ → the belt step stalled going down in 5 of 5.
+//! One update per step: σ moves at most `max_change_per_step_mps` (0.02 m/s) per step; the
+//! shipped gains are k_s = 0.5, k_i = 0.1 per step (the integral removes the planned-vs-walked
+//! bias of the library, up to I_max = 0.1 m/s), k_p = 0.3 /s, c = 1 (`command_share`: σ starts
+//! from the position loop's command v_cmd), k_ℓ = 0.1 s (1 cm longer step per 0.1 m/s too
+//! fast), Δℓ_max = 0.04 m.
+//!
+//! Two laws were measured (2026-12-05, seeds 1–5). **A** (shipped): c = 1, k_s = 0.5,
+//! k_i = 0.1 — the law before the lever, plus the lever. **B**: c = 0, k_s = 0, k_i = 0.2 (σ
+//! follows the operator's speed, the position acts through the integral and the lever only).
+//! On the shipped library (`adam bench treadmill`) B is better at the slow end: 0.15 m/s 0/5
+//! stalls (A: 4/5), 0.20 m/s 1/5 (A: 2/5), max |position| after 10 s 0.309 / 0.300 / 0.260 /
+//! 0.129 / 0.110 m at 0.15–0.35 m/s (A: 0.477 / 0.490 / 0.208 / 0.111 / 0.105 m). But on the
+//! test library (`runtime/tests/fixtures/library/`) B breaks what A (and the law before the
+//! lever) holds: Walk from Stand onto a belt at 0.25 m/s trips the step timeout in 4 seeds of
+//! 5 (the launch leaves the robot 0.72 m behind the centre; with σ held at the belt's speed
+//! the steps after the launch, walked faster than the orbit, pull σ down through the integral
+//! and the walk stalls within 2 s — also with k_ℓ = 0, so not the lever; holding the error and
+//! the lever for the first 2–5 steps of a walk did not save it either), the 0.25 m/s belt
+//! strays 0.188 m (A: 0.147 m), and +7.5 N pushes at 90 % of the step ride through in 3 of 5.
+//! In between, c = 0.5 (k_s 0.5, k_i 0.1): 0.15 m/s 5/5 stalls on the shipped library; c = 0
+//! with k_s 0.5, k_i 0.1: 4/5. So k_s > 0 is what stalls the shipped library's slowest gait,
+//! and c = 1 is what the launch needs; no one set of gains was found for both libraries.
+//!
+//! Tried with law B before (worst |position| after 10 s): k_ℓ 0.2 → 0.15 and 0.20 m/s stall in
+//! most seeds; k_ℓ 0.05 → 0.30 m at 0.25 m/s; k_ℓ 0.15 → 3 stalls of 5 at 0.15 m/s (but the
+//! belt step 5 of 5); k_i 0.3 → 0.30 m at 0.20 m/s; k_p 0.5 → 0.43 m at 0.25 m/s; an integral
+//! on Δℓ (0.02–0.05 m per m/s and step) → steady long steps that stall at 0.25–0.30 m/s; a
+//! lever on the position (Δℓ += 0.03–0.1 m per m of position) → stalls at 0.15–0.25 m/s; the
+//! integral's excess beyond the library's slowest gait turned into Δℓ → the belt step stalled
+//! going down in 5 of 5. With law A on the test library: k_ℓ 0.05 → the belt step
+//! 0.20 → 0.30 → 0.20 m/s stalls in seed 2 of 3; Δℓ_max 0.02 m → seed 1 of 3.
 //!
 //! # Why the library speed does not set the walked speed (measured, 2026-12-05)
 //! Each library gait walked alone (no speed control, an endless belt at its speed, seed 1,
@@ -85,15 +104,14 @@
 //! and the integral takes up the bias. Not a defect of the simulator found: step lengths are
 //! as planned.
 //!
-//! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`)
-//! No fall at any belt speed; one stall (0.20 m/s, seed 1, after 15 steps: a long lever step
-//! while σ fell fast, then a double touchdown); at 0.15 m/s the robot walks 3–4 % fast (the
-//! library's slowest gait walks 0.155 m/s and σ cannot go lower) and drifts up to 0.3 m
-//! forward; 0.25 m/s strays up to 0.26 m (a slow oscillation of the integral, period ~15 s).
-//! The belt step 0.20 → 0.30 → 0.20 m/s rides through in 4 seeds of 5 but takes 8–24 steps
-//! to settle going down. Backward pushes of −20 N at 10, 30 and 90 % of the step stall the step
-//! under way (0 of 5; 3 of 5 at 50 %, 5 of 5 at 70 %), which no per-step lever reaches: it acts
-//! at the next impact. +40 N rides through at every point.
+//! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, law A)
+//! 0.25–0.35 m/s: no fall, no trip, within 0.2 % of the belt's speed, max |position| after
+//! 10 s 0.208 / 0.111 / 0.105 m. 0.15 m/s: 4 of 5 stall (step timeout); 0.20 m/s: 2 of 5, the
+//! robot strays up to 0.49 m (law B: see above). The belt step 0.20 → 0.30 → 0.20 m/s rides
+//! through in 4 seeds of 5, matching the belt in 9–28 steps going up and 4–25 going down,
+//! |position| up to 0.63 m. Backward pushes of −20 N at 10, 30 and 90 % of the step stall the
+//! step under way (0 of 5; 4 of 5 at 50 %, 5 of 5 at 70 %), which no per-step lever reaches: it
+//! acts at the next impact. +40 N rides through at every point but one seed at 90 %.
 //!
 //! The gains are the config's `[speed]` section ([`crate::config::SpeedConfig`]).
 
@@ -381,6 +399,7 @@ pub(super) struct SpeedRegulator {
     max_change_per_step_mps: f64,
     step_length_gain_s: f64,
     max_step_offset_m: f64,
+    command_share: f64,
     /// Belt travel since the last impact, m.
     belt_travel_m: f64,
     /// Time of the last [`SpeedRegulator::advance`], s.
@@ -405,6 +424,7 @@ impl SpeedRegulator {
             max_change_per_step_mps: config.max_change_per_step_mps,
             step_length_gain_s: config.step_length_gain_s,
             max_step_offset_m: config.max_step_offset_m,
+            command_share: config.command_share,
             belt_travel_m: 0.0,
             last_t_s: None,
             previous_step: None,
@@ -493,10 +513,14 @@ impl SpeedRegulator {
         s.clamped = s.commanded_mps != s.requested_mps;
         let integral = (s.integral_mps + self.integral_gain * error)
             .clamp(-self.integral_limit_mps, self.integral_limit_mps);
-        // The library gait is chosen for the operator's speed (belt + offset), not for the
-        // position loop's command: the library speed only sets a walked speed tens of steps
-        // later, and the position acts through the step lever instead.
-        let sigma = (s.belt_mps + s.offset_mps).clamp(lo, hi) + self.speed_gain * error + integral;
+        // The library gait starts from the operator's speed (belt + offset) and takes the
+        // share `command_share` of the position loop's correction (1: the command itself; 0:
+        // the position acts through the integral and the step lever only; module docs).
+        let base = (s.belt_mps + s.offset_mps).clamp(lo, hi);
+        let sigma = base
+            + self.command_share * (s.commanded_mps - base)
+            + self.speed_gain * error
+            + integral;
         // Anti-windup: the integral only grows while σ is inside the library.
         if (lo..=hi).contains(&sigma) || integral.abs() < s.integral_mps.abs() {
             s.integral_mps = integral;
@@ -545,12 +569,39 @@ mod tests {
         // Forward of the centre: the command is below the belt speed by k_p·p ...
         let command = 0.25 - config.position_gain_per_s * 0.04;
         assert!((r.status.commanded_mps - command).abs() < 1e-9);
-        // ... the library gait stays the belt's (no stride measured against a command yet) ...
-        assert!((sigma - 0.25).abs() < 1e-12, "σ = {sigma}");
+        // ... the library gait follows the command (no stride measured against a command yet,
+        // so no error, no integral) ...
+        assert!((sigma - command).abs() < 1e-12, "σ = {sigma}");
         // ... and the step was faster than the command: the next one lands longer.
         let offset = config.step_length_gain_s * (0.3 - command);
         assert!(offset > 0.0);
         assert!((r.status.step_offset_m - offset).abs() < 1e-12);
+    }
+
+    #[test]
+    fn with_no_command_share_the_library_gait_follows_the_operator_not_the_position() {
+        let config = SpeedConfig {
+            command_share: 0.0,
+            ..SpeedConfig::default()
+        };
+        let mut r = SpeedRegulator::new(&config, 0.25);
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        r.belt_travel_m = 0.2;
+        // 4 cm forward of the centre: the command drops, the library gait stays the belt's.
+        let sigma = r.on_impact(0.24, 0.8, (0.15, 0.35));
+        assert!(r.status.commanded_mps < 0.25 - 0.01);
+        assert!((sigma - 0.25).abs() < 1e-12, "σ = {sigma}");
+        // Half the share: half-way.
+        let half = SpeedConfig {
+            command_share: 0.5,
+            ..SpeedConfig::default()
+        };
+        let mut r = SpeedRegulator::new(&half, 0.25);
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        r.belt_travel_m = 0.2;
+        let sigma = r.on_impact(0.24, 0.8, (0.15, 0.35));
+        let expected = 0.25 + 0.5 * (r.status.commanded_mps - 0.25);
+        assert!((sigma - expected).abs() < 1e-12, "σ = {sigma}");
     }
 
     #[test]
