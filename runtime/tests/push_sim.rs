@@ -117,7 +117,9 @@ fn assert_rides_through(force_n: f64) {
 /// both feet, carried back by the belt): −7.5 N [1, 5, 1, 5, 0], −10 N [0, 3, 2, 5, 0],
 /// +10 N [3, 4, 4, 4, 4], +20 N [0, 0, 1, 1, 0]. The largest push that rides through in at
 /// least 4 of 5 seeds, per point: backward −5, −7.5, −5, −10, −5 N; forward +7.5, +10, +10,
-/// +10, +10 N.
+/// +10, +10 N. With the step lever and the shipped gains (2026-12-05): −5 N [5, 5, 5, 5, 5],
+/// +7.5 N [4, 5, 4, 5, 4] (seed 1 stalls at 10, 50 and 90 %); with σ following the belt speed
+/// (`speed.command_share = 0`) +7.5 N at 90 % rode through in 3 of 5.
 #[test]
 fn small_pushes_ride_through_at_five_points_of_a_step() {
     assert_rides_through(-5.0);

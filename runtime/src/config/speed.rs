@@ -9,13 +9,17 @@ use serde::{Deserialize, Serialize};
 /// (an operator `belt` command).
 ///
 /// At each impact k (the Poincaré section), with the last step's measured speed v_k, the
-/// belt speed b set by the operator and the estimated position p on the belt (+ forward):
+/// last stride's (two steps) v̄_k, the belt speed b set by the operator and the estimated
+/// position p on the belt (+ forward):
 /// ```text
 /// v_cmd = clamp(b + offset − position_gain_per_s · p, library range)
-/// e_k   = v_cmd − v_k             (speed error of the last stride: the last two steps)
+/// e_k   = v_cmd,k−1 − v̄_k          (speed error of the last stride against its command)
 /// I    += integral_gain · e_k                           (|I| ≤ integral_limit_mps)
-/// σ     = clamp(v_cmd + speed_gain · e_k + I, library range,
+/// u     = b + offset
+/// σ     = clamp(u + command_share · (v_cmd − u) + speed_gain · e_k + I, library range,
 ///               σ_prev ± max_change_per_step_mps)          (the library gait of the next step)
+/// Δℓ    = clamp(step_length_gain_s · (v_k − v_cmd), ± max_step_offset_m)
+///                                        (the next step lands Δℓ longer: the step lever)
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -31,6 +35,19 @@ pub struct SpeedConfig {
     /// The library speed changes by at most this much from one step to the next, m/s: each
     /// switch starts the new gait close to its own orbit.
     pub max_change_per_step_mps: f64,
+    /// The step lever: the next step lands this much longer per m/s that the last stride was
+    /// faster than the command, m/(m/s) = s (0: off).
+    #[serde(default = "default_step_length_gain_s")]
+    pub step_length_gain_s: f64,
+    /// The step lever's offset stays within ± this, m.
+    #[serde(default = "default_max_step_offset_m")]
+    pub max_step_offset_m: f64,
+    /// How much of the position loop's command the library speed follows: σ starts from
+    /// b + offset + command_share·(v_cmd − b − offset) (0: the operator's speed, the position
+    /// acting through the integral and the step lever only; 1, the default: v_cmd). Within
+    /// [0, 1]; `runtime::control::speed` compares the two ends.
+    #[serde(default = "default_command_share")]
+    pub command_share: f64,
     /// Where the position on the belt comes from: leg odometry (the belt speed set by the
     /// operator integrated against the measured steps).
     #[serde(default)]
@@ -58,10 +75,25 @@ impl Default for SpeedConfig {
             integral_gain: 0.1,
             integral_limit_mps: 0.1,
             max_change_per_step_mps: 0.02,
+            step_length_gain_s: default_step_length_gain_s(),
+            max_step_offset_m: default_max_step_offset_m(),
+            command_share: 1.0,
             position_source: PositionSource::Odometry,
             library: None,
         }
     }
+}
+
+fn default_step_length_gain_s() -> f64 {
+    0.1
+}
+
+fn default_max_step_offset_m() -> f64 {
+    0.04
+}
+
+fn default_command_share() -> f64 {
+    1.0
 }
 
 impl SpeedConfig {
@@ -76,6 +108,8 @@ impl SpeedConfig {
                 "speed.max_change_per_step_mps",
                 self.max_change_per_step_mps,
             ),
+            ("speed.step_length_gain_s", self.step_length_gain_s),
+            ("speed.max_step_offset_m", self.max_step_offset_m),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {
@@ -85,6 +119,14 @@ impl SpeedConfig {
                     reason: "must be finite and not negative".into(),
                 });
             }
+        }
+        if !(0.0..=1.0).contains(&self.command_share) {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "speed.command_share".into(),
+                value: self.command_share.to_string(),
+                reason: "must be within [0, 1] (0: the library speed follows the operator's speed, 1: the position loop's command)".into(),
+            });
         }
         // Gains that large overshoot every step (the loop is discrete: one update per step).
         for (field, v) in [
@@ -102,5 +144,31 @@ impl SpeedConfig {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_command_share_outside_zero_to_one_is_refused_naming_the_field_and_value() {
+        for bad in [-0.1, 1.5, f64::NAN] {
+            let c = SpeedConfig {
+                command_share: bad,
+                ..SpeedConfig::default()
+            };
+            let e = c.validate("adam.toml").expect_err("refused").to_string();
+            assert!(e.contains("adam.toml"), "{e}");
+            assert!(e.contains("speed.command_share"), "{e}");
+            assert!(e.contains(&bad.to_string()), "{e}");
+        }
+        for good in [0.0, 0.5, 1.0] {
+            let c = SpeedConfig {
+                command_share: good,
+                ..SpeedConfig::default()
+            };
+            assert!(c.validate("adam.toml").is_ok());
+        }
     }
 }

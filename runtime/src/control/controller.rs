@@ -51,7 +51,7 @@
 
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
-use super::speed::{SpeedLibrary, SpeedRegulator};
+use super::speed::{SpeedLibrary, SpeedRegulator, StepLever};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
     braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
@@ -146,6 +146,8 @@ pub struct Controller {
     library: Option<SpeedLibrary>,
     /// The step-to-step speed regulator and the belt-position loop.
     regulator: SpeedRegulator,
+    /// The step-length lever of the gait walked, and this step's offset (speed control).
+    step_lever: StepLever,
 }
 
 impl Controller {
@@ -223,6 +225,8 @@ impl Controller {
                 ),
             }
         })?;
+        let step_lever =
+            StepLever::of(&geometry, &gait_table, gait.step_length_m).unwrap_or_default();
         let library = SpeedLibrary::new(
             library,
             (gait, &gait_table),
@@ -296,6 +300,7 @@ impl Controller {
             last_imu_t_s: None,
             library,
             regulator: SpeedRegulator::new(&config.speed, gait.speed_mps),
+            step_lever,
             model,
         })
     }
@@ -340,6 +345,7 @@ impl Controller {
         self.phase_hat = None;
         self.steps = 0;
         self.regulator.restart();
+        self.step_lever.offset_m = 0.0;
         self.enter(ControlState::Walk, status);
         true
     }
@@ -419,6 +425,7 @@ impl Controller {
                 self.touchdown_ticks = 0;
                 self.steps = 0;
                 self.regulator.restart();
+                self.step_lever.offset_m = 0.0;
                 self.launch_requested = true;
                 self.enter(S::Walk, status);
             }
@@ -727,8 +734,18 @@ impl Controller {
             .regulator
             .on_impact(step_length_m, step_duration_s, library.range_mps());
         let span_old = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
-        let y_old = eval.y;
-        library.blend_into(sigma, &mut self.gait, &mut self.lunge);
+        let mut y_old = eval.y;
+        // The step that ended landed its lever's offset from the gait's touchdown pose: relabeled
+        // to the new stance leg's outputs, it is part of the jump the new step blends out.
+        let (new, old) = (side_index(self.stance), side_index(self.stance.other()));
+        for (j, y) in y_old.iter_mut().enumerate() {
+            let slot = self.gait.out_slot[new][j];
+            if let Some(i) = (0..OUTPUTS).find(|&i| self.gait.out_slot[old][i] == slot) {
+                *y += self.step_lever.dy_end(i);
+            }
+        }
+        library.blend_into(sigma, &mut self.gait, &mut self.lunge, &mut self.step_lever);
+        self.step_lever.offset_m = self.regulator.status.step_offset_m;
         let span_new = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
         // The same stance-leg angle rate, in the new gait's phase units.
         let rate = if span_new.abs() > 1e-9 {

@@ -328,6 +328,8 @@ pub struct SpeedStatus {
     pub integral_mps: f64,
     /// The requested speed was outside the library's range and clamped.
     pub clamped: bool,
+    /// How much longer than its gait's the next step lands (the step lever), m.
+    pub step_offset_m: f64,
 }
 
 impl SpeedStatus {
@@ -344,6 +346,7 @@ impl SpeedStatus {
         library_mps: f64::NAN,
         integral_mps: 0.0,
         clamped: false,
+        step_offset_m: 0.0,
     };
 }
 

@@ -4,6 +4,7 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
+use crate::control::speed::LEVER_BLEND_FROM;
 use crate::control::transitions::{blend_weight, BRAKE_BLEND_FROM, START_KNEE_BLEND_SPAN};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
 use model::robot::MAX_DOF;
@@ -143,6 +144,16 @@ impl Controller {
                 dy[i] += db * lunge.dy_end[i];
             }
         }
+        // The step lever (speed control): a longer or shorter step, its touchdown pose blended in
+        // over the second part of the step as the braking step's.
+        let lever = &self.step_lever;
+        if !self.braking && lever.offset_m != 0.0 {
+            let (b, db) = blend_weight(s, LEVER_BLEND_FROM, 1.0 - LEVER_BLEND_FROM, inside, rate);
+            for i in 0..OUTPUTS {
+                y[i] += b * lever.dy_end(i);
+                dy[i] += db * lever.dy_end(i);
+            }
+        }
         let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
         WalkEval {
             feedforward_nm: self.gait.feedforward(s),
@@ -188,11 +199,12 @@ impl Controller {
             .unwrap_or(f64::NAN);
         let (phase, rate) = match self.phase_source {
             PhaseSource::StateBased => {
-                // The braking step ends at its own, larger stance-leg angle.
+                // The braking step ends at its own, larger stance-leg angle; a step of the lever
+                // at its own too.
                 let theta_end = if self.braking {
                     self.lunge.theta_rad
                 } else {
-                    self.gait.theta_minus_rad
+                    self.gait.theta_minus_rad + self.step_lever.theta_offset_rad()
                 };
                 let span = theta_end - self.gait.theta_plus_rad;
                 let (theta, theta_rate) = self
