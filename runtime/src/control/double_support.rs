@@ -84,7 +84,11 @@
 //! Not fixed: a launch at 0.16 m/s (margin 1.05) walks both gaits from Stand (and passes
 //! `the_replanned_gait_walks_on_from_stand`) but breaks every restart after a Stop (restart_sim:
 //! step timeout 2.7–3.8 s after the second Walk, seed 1, both gaits; and the gait library's
-//! launch from Stand); stand_sim's shipped walk then stalls at 15.2 s. The
+//! launch from Stand); stand_sim's shipped walk then stalls at 15.2 s. Nor does a speed that
+//! grows with how far the launch lowered the torso (after a Stop it ends at z 0.654 m against
+//! 0.683 m from Stand; 0.16–0.17 m/s + 0.8–1.7 m/s per metre lowered, 12 pairs): each pair fails
+//! some of restart_sim's Walk → Stop → Walk tests (shipped or re-plan) or stand_sim, and the pass
+//! pattern jumps between neighbouring pairs: the outcome is a knife edge in the hand-over state. The
 //! fix needs a launch that hands over onto the gait's own orbit (the planned stance-leg angular
 //! momentum at the hand-over angle) rather than a fixed speed, or a walk controller that pulls
 //! the step's energy back to the orbit (the planner verified |λ| 0.9 for the HZD, not for the
