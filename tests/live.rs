@@ -157,6 +157,25 @@ fn log_messages(path: &std::path::Path) -> BTreeMap<String, Vec<(u64, Value)>> {
     out
 }
 
+/// The live `/joints` (subscription 1) and `/estimator` (2): at least 100 messages over at
+/// least 1 s, each equal to the log's message of the same time stamp.
+fn assert_live_equals_log(received: &BTreeMap<u32, Vec<(u64, Value)>>, log: &std::path::Path) {
+    let logged = log_messages(log);
+    for (sub, topic) in [(1, "/joints"), (2, "/estimator")] {
+        let by_time: HashMap<u64, &Value> = logged[topic].iter().map(|(t, v)| (*t, v)).collect();
+        let got = received.get(&sub).map(Vec::as_slice).unwrap_or_default();
+        assert!(got.len() >= 100, "{topic}: {} messages", got.len());
+        let span_s = (got[got.len() - 1].0 - got[0].0) as f64 * 1e-9;
+        assert!(span_s >= 1.0, "{topic}: {span_s} s of samples");
+        for (t, v) in got {
+            let l = by_time
+                .get(t)
+                .unwrap_or_else(|| panic!("{topic} at {t} ns is not in the log"));
+            assert_eq!(*l, v, "{topic} at {t} ns");
+        }
+    }
+}
+
 /// `adam live` (runtime::live::serve) on its own thread, on a port the OS picks.
 fn start_live(
     setup: &runtime::Setup,
@@ -239,20 +258,7 @@ async fn live_samples_match_the_mcap_log_of_the_same_run() {
     assert_eq!(report.summary.publish_failures, 0);
     assert_eq!(live.server.slow_dropped, 0);
 
-    let logged = log_messages(&log);
-    for (sub, topic) in [(1, "/joints"), (2, "/estimator")] {
-        let by_time: HashMap<u64, &Value> = logged[topic].iter().map(|(t, v)| (*t, v)).collect();
-        let got = received.get(&sub).map(Vec::as_slice).unwrap_or_default();
-        assert!(got.len() >= 100, "{topic}: {} messages", got.len());
-        let span_s = (got[got.len() - 1].0 - got[0].0) as f64 * 1e-9;
-        assert!(span_s >= 1.0, "{topic}: {span_s} s of samples");
-        for (t, v) in got {
-            let l = by_time
-                .get(t)
-                .unwrap_or_else(|| panic!("{topic} at {t} ns is not in the log"));
-            assert_eq!(*l, v, "{topic} at {t} ns");
-        }
-    }
+    assert_live_equals_log(&received, &log);
     // The robot in 3D: both trees, every transform finite; the URDF and the belt.
     let tf = &received[&3];
     assert!(tf.len() >= 10, "{} /tf messages", tf.len());
@@ -279,6 +285,7 @@ async fn live_samples_match_the_mcap_log_of_the_same_run() {
     let belt = &received[&5][0].1["entities"][0];
     assert_eq!(belt["id"], "belt");
     // The same scene channels are in the log.
+    let logged = log_messages(&log);
     for topic in ["/tf", "/scene", "/robot_description"] {
         assert!(!logged[topic].is_empty(), "{topic} logged");
     }
@@ -751,20 +758,7 @@ async fn live_view_of_a_udp_run_matches_its_log() {
         "the viewer's report: {stdout}"
     );
 
-    let logged = log_messages(&log);
-    for (sub, topic) in [(1, "/joints"), (2, "/estimator")] {
-        let by_time: HashMap<u64, &Value> = logged[topic].iter().map(|(t, v)| (*t, v)).collect();
-        let got = received.get(&sub).map(Vec::as_slice).unwrap_or_default();
-        assert!(got.len() >= 100, "{topic}: {} messages", got.len());
-        let span_s = (got[got.len() - 1].0 - got[0].0) as f64 * 1e-9;
-        assert!(span_s >= 1.0, "{topic}: {span_s} s of samples");
-        for (t, v) in got {
-            let l = by_time
-                .get(t)
-                .unwrap_or_else(|| panic!("{topic} at {t} ns is not in the log"));
-            assert_eq!(*l, v, "{topic} at {t} ns");
-        }
-    }
+    assert_live_equals_log(&received, &log);
     let tf = received.get(&3).map(Vec::as_slice).unwrap_or_default();
     assert!(tf.len() >= 10, "{} /tf messages", tf.len());
     for (_, m) in tf {

@@ -56,11 +56,7 @@ pub(crate) fn tasks(
     };
     let task = |index: usize| Task {
         index,
-        initial_m: None,
-        lengths_m: None,
-        optimum_from_m: None,
-        treadmill: None,
-        speed_mps: None,
+        ..Task::default()
     };
     let mut tasks: Vec<Task> = points
         .into_iter()

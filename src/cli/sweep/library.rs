@@ -79,11 +79,8 @@ pub(crate) fn plan(r: &LibraryRequest<'_>) -> Result<(Vec<Input>, LibrarySetting
         .enumerate()
         .map(|(index, &v)| Task {
             index,
-            initial_m: None,
-            lengths_m: None,
-            optimum_from_m: None,
-            treadmill: None,
             speed_mps: Some(v),
+            ..Task::default()
         })
         .collect();
     Ok((

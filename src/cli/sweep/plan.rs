@@ -176,7 +176,7 @@ pub(crate) struct LibrarySettings {
 }
 
 /// One task: its index and what it runs (the field of its study).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct Task {
     /// The task's index: its `$SLURM_ARRAY_TASK_ID` and its result file's name.
@@ -532,11 +532,8 @@ mod tests {
                 .enumerate()
                 .map(|(index, &v)| Task {
                     index,
-                    initial_m: None,
-                    lengths_m: None,
-                    optimum_from_m: None,
-                    treadmill: None,
                     speed_mps: Some(v),
+                    ..Task::default()
                 })
                 .collect(),
             ..plan()
@@ -558,11 +555,8 @@ mod tests {
         });
         l.tasks[3] = Task {
             index: 3,
-            initial_m: None,
-            lengths_m: None,
             optimum_from_m: Some([0.24, 0.25]),
-            treadmill: None,
-            speed_mps: None,
+            ..Task::default()
         };
         let text = l.to_toml().unwrap();
         assert!(text.contains("start = \"neighbours\""), "{text}");
@@ -618,10 +612,7 @@ mod tests {
                 .map(|(index, &(a, b))| Task {
                     index,
                     initial_m: Some([a, b]),
-                    lengths_m: None,
-                    optimum_from_m: None,
-                    treadmill: None,
-                    speed_mps: None,
+                    ..Task::default()
                 })
                 .collect();
             let back = SweepPlan::parse(&p.to_toml().unwrap(), Path::new("p.toml")).unwrap();

@@ -57,11 +57,8 @@ pub(crate) fn plan(
         .enumerate()
         .map(|(index, run)| Task {
             index,
-            initial_m: None,
-            lengths_m: None,
-            optimum_from_m: None,
             treadmill: Some(run),
-            speed_mps: None,
+            ..Task::default()
         })
         .collect();
     Ok((inputs, TreadmillSettings { seeds, quick }, tasks))
