@@ -4,6 +4,9 @@
 //! No assertion on wall-clock durations: every wait is a generous timeout that only bounds a
 //! hung test (the machine may be loaded), and counts are checked, not rates.
 
+mod common;
+
+use common::adam;
 use futures_util::{SinkExt, StreamExt};
 use runtime::live::feed::{channel_id, Decimation, Feed};
 use runtime::live::protocol::{parse_message_data, ClientData, SUBPROTOCOL};
@@ -635,12 +638,6 @@ fn the_layout_names_only_topics_and_fields_of_a_log_and_of_the_live_server() {
     std::fs::remove_file(&log).ok();
 }
 
-fn adam() -> std::process::Command {
-    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_adam"));
-    c.current_dir(env!("CARGO_MANIFEST_DIR"));
-    c
-}
-
 /// `adam run --backend udp --live` against `adam emulate motors` in another process: the same
 /// loop publishes its samples, `adam live` (its child) serves them, and every `/joints` and
 /// `/estimator` message a client decodes is the log's at the same time; the robot's tree is in
@@ -662,27 +659,7 @@ async fn live_view_of_a_udp_run_matches_its_log() {
     std::fs::write(&config, text).expect("write config");
     let log = dir.join("udp.mcap");
 
-    let mut emulator = adam()
-        .args([
-            "emulate",
-            "motors",
-            "--listen",
-            "127.0.0.1:0",
-            "--idle-exit",
-            "60",
-        ])
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .expect("emulator");
-    let mut emulator_out = std::io::BufReader::new(emulator.stdout.take().expect("stdout"));
-    let mut first = String::new();
-    std::io::BufRead::read_line(&mut emulator_out, &mut first).expect("emulator's first line");
-    let motors = first
-        .split(" from ")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap_or_else(|| panic!("no address in `{first}`"))
-        .to_string();
+    let (mut emulator, mut emulator_out, motors) = common::spawn_emulator();
     let addr = std::net::TcpListener::bind("127.0.0.1:0")
         .and_then(|l| l.local_addr())
         .expect("a free port");

@@ -7,15 +7,13 @@
 
 use runtime::telemetry::frames_read::{read_frames, CanRow};
 use std::collections::BTreeMap;
-use std::io::{BufRead, BufReader};
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 
-fn adam() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_adam"));
-    c.current_dir(env!("CARGO_MANIFEST_DIR"));
-    c
-}
+mod common;
+
+use common::adam;
 
 fn temp(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("adam-udp-link-{}", std::process::id()));
@@ -56,27 +54,7 @@ fn number_after(text: &str, key: &str) -> f64 {
 
 #[test]
 fn the_runtime_walks_the_emulated_robot_over_udp_and_logs_the_in_process_frames() {
-    let mut emulator = adam()
-        .args([
-            "emulate",
-            "motors",
-            "--listen",
-            "127.0.0.1:0",
-            "--idle-exit",
-            "60",
-        ])
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = BufReader::new(emulator.stdout.take().unwrap());
-    let mut first = String::new();
-    out.read_line(&mut first).unwrap();
-    let addr = first
-        .split(" from ")
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .unwrap_or_else(|| panic!("no address in `{first}`"))
-        .to_string();
+    let (mut emulator, out, addr) = common::spawn_emulator();
 
     let udp_log = temp("udp.mcap");
     let run = adam()
