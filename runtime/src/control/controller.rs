@@ -11,7 +11,8 @@
 //! Walk/Stop: q = [0, 0, θ̂, legs…] → θ(q), θ̇ (model::phase) → τ, τ̇ → y^d(τ), ẏ^d = y^d'(τ)·τ̇
 //!            swing-foot height + τ ≥ τ_switch, debounced → stance switch (relabel outputs)
 //! Ramp: minimum-jerk move from the measured pose to y^d(0); Stand: hold y^d(0)
-//! Walk from Stand: 1 s launch in double support, then the first step blends into y^d(τ)
+//! Walk from Stand: ≤ 1 s launch in double support onto the orbit's σ*(θ), then the first step
+//!       blends into y^d(τ)
 //! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
 //!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles
 //! Walk/Stop: no progress of τ for safety.stall_timeout_s ──▶ Damping (Trip::StepTimeout)
@@ -27,11 +28,14 @@
 //! # Walk from Stand: a launch
 //! At rest in double support the state-based phase has no momentum to run on. On Walk the
 //! controller first carries the torso forward with both feet down (1 s: a quintic from rest
-//! to 4 cm behind the stance foot, arriving at 0.2 m/s;
+//! to 4 cm behind the stance foot, arriving at the speed whose angular momentum about the stance
+//! foot is the planned orbit's σ*(θ) there (`orbit_table`; after a Stop: 0.2 m/s);
 //! joint targets by `double_support` inverse kinematics, gravity fed forward, PI feedback on
-//! the measured torso pose), then lifts the rear foot: the first step starts at the measured
-//! phase, its outputs blending (minimum jerk) from the launch's end pose into y^d(τ). From
-//! there the gait's stable orbit takes over (`runtime/tests/stand_sim.rs`).
+//! the measured torso pose), then lifts the rear foot (after Ramp: as soon as the measured
+//! momentum reaches σ*(θ), from 0.9 s on; after a Stop: at 1 s): the first step starts at the
+//! measured phase, its outputs blending (minimum jerk) from the launch's end pose into y^d(τ).
+//! From there the gait's stable orbit takes over, from the first steps at the planned duration
+//! (`runtime/tests/stand_sim.rs`, `restart_sim.rs`).
 //!
 //! # Stop: why a braking step
 //! The gait lands each step with the torso moving at ~0.40 m/s. With point feet, double support
@@ -556,6 +560,7 @@ impl Controller {
                 if self
                     .launch
                     .is_some_and(|l| t - l.start_t_s < LAUNCH_DURATION_S)
+                    && !self.launch_on_orbit(t, &leg_q, &leg_dq)
                 {
                     self.launch_commands(t, &leg_q, &leg_dq, &mut out.commands);
                     // The phase is reported (the stance-leg angle), not yet used.

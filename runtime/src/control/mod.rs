@@ -8,11 +8,13 @@
 //! | `gait_table` | the gait in fixed arrays: Bézier outputs, stance relabeling, feed-forward |
 //! | `speed` | treadmill speed control: the gait library by speed, interpolated at impact; the step-to-step regulator and the belt-position loop |
 //! | `transitions` | ramp, launch, start blend, braking step; minimum-jerk blends |
+//! | `orbit_table` | the planned orbit's stance-leg angular momentum σ*(θ) (zero dynamics), for the launch's hand-over |
 //! | `double_support` | kinematics with both feet down: torso pose, inverse kinematics |
 
 pub mod controller;
 mod double_support;
 mod gait_table;
+mod orbit_table;
 mod speed;
 pub mod tick;
 mod transitions;

@@ -4,6 +4,7 @@
 
 use super::double_support::{Geometry, TorsoPose};
 use super::gait_table::{side_index, GaitTable};
+use super::orbit_table::OrbitTable;
 use crate::slots::{LEG_SLOTS, OUTPUTS, SLOTS};
 
 /// The torso pose of the gait's first pose relative to its stance foot (the planned pitch;
@@ -88,7 +89,7 @@ pub(super) const BRAKE_BLEND_FROM: f64 = 0.3;
 /// A launch carries the torso to this far behind the stance foot, m: the robot then needs
 /// little speed to pass over it (README: the range that walked while tuning).
 pub(super) const LAUNCH_BEHIND_M: f64 = 0.04;
-/// ... arriving at this forward speed, m/s.
+/// ... arriving at this forward speed after a Stop, m/s (after Ramp: the orbit's, `orbit_table`).
 pub(super) const LAUNCH_SPEED_MPS: f64 = 0.2;
 /// ... (or less far forward, if the rear foot would make the torso drop more than this, m) ...
 pub(super) const LAUNCH_MAX_DROP_M: f64 = 0.03;
@@ -99,6 +100,10 @@ pub(super) const LAUNCH_PASS_MARGIN: f64 = 1.3;
 pub(super) const LAUNCH_DURATION_S: f64 = 1.0;
 /// ... with the torso no higher than keeps the rear leg within this fraction of its reach.
 pub(super) const LAUNCH_REACH_FRACTION: f64 = 0.995;
+/// A launch onto the orbit (from the gait's own stance) hands over as soon as the measured
+/// angular momentum about the stance foot reaches the planned orbit's σ*(θ), but not before this
+/// far into it, s (the torso overshoots its quintic's end speed by 10-30 %: measured).
+pub(super) const LAUNCH_ORBIT_EARLIEST_S: f64 = 0.9;
 /// Gains of the launch's torso pose feedback: proportional, and integral (1/s).
 pub(super) const LAUNCH_POSE_KP: f64 = 0.9;
 pub(super) const LAUNCH_POSE_KI_PER_S: f64 = 3.0;
@@ -132,6 +137,8 @@ pub(super) struct Launch {
     pub(super) to: TorsoPose,
     /// Forward torso speed at the launch's end, m/s.
     pub(super) speed_mps: f64,
+    /// The planned orbit's σ*(θ) of the gait walked (`None`: the launch runs its whole time).
+    pub(super) orbit: Option<OrbitTable>,
     /// The rear foot relative to the stance foot, m.
     pub(super) other_foot_xz_m: [f64; 2],
     /// The last joint solution (the next tick's Newton start), model rad.

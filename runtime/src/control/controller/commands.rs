@@ -5,10 +5,12 @@ use super::walk::WalkEval;
 use super::Controller;
 use crate::control::double_support::{self, Geometry};
 use crate::control::gait_table::side_index;
+use crate::control::orbit_table::OrbitTable;
 use crate::control::tick::{CommandMode, JointCommand};
 use crate::control::transitions::{
-    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_MAX_DROP_M, LAUNCH_PASS_MARGIN,
-    LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP, LAUNCH_REACH_FRACTION, LAUNCH_SPEED_MPS,
+    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_MAX_DROP_M, LAUNCH_ORBIT_EARLIEST_S,
+    LAUNCH_PASS_MARGIN, LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP, LAUNCH_REACH_FRACTION,
+    LAUNCH_SPEED_MPS,
 };
 use crate::estimator::GRAVITY_MPS2;
 use crate::slots::{LEG_SLOTS, OUTPUTS, SLOTS};
@@ -70,8 +72,11 @@ impl Controller {
     /// Starts a launch from the measured double-support pose at rest: the torso moves forward
     /// to [`LAUNCH_BEHIND_M`] behind the stance foot (less far if the rear leg would make it drop
     /// more than [`LAUNCH_MAX_DROP_M`]), no higher than keeps the rear leg within
-    /// [`LAUNCH_REACH_FRACTION`] of its reach, arriving at [`LAUNCH_SPEED_MPS`] (more if it
-    /// ends further back: enough to pass over the stance foot, [`LAUNCH_PASS_MARGIN`]).
+    /// [`LAUNCH_REACH_FRACTION`] of its reach. From the gait's own stance (Stand after Ramp) it
+    /// arrives at the planned orbit's angular momentum about the stance foot (`orbit_table`) and
+    /// hands over as soon as the measured momentum reaches it ([`Self::launch_on_orbit`]); after
+    /// a Stop at [`LAUNCH_SPEED_MPS`] (more if it ends further back: enough to pass over the
+    /// stance foot, [`LAUNCH_PASS_MARGIN`]), handing over at the end.
     pub(super) fn begin_launch(
         &mut self,
         t_s: f64,
@@ -102,11 +107,23 @@ impl Controller {
             // Further behind the stance foot, more speed carries the torso over it (an inverted
             // pendulum of height z passes over from x behind at speed > |x|·√(g/z)).
             let pass_mps = LAUNCH_PASS_MARGIN * (-x).max(0.0) * (GRAVITY_MPS2 / z).sqrt();
-            let speed_mps = LAUNCH_SPEED_MPS.max(pass_mps);
+            let to = [x, z, m.pose[2]];
+            // From the gait's own stance (after Ramp) the launch hands over onto the planned
+            // orbit; after a Stop (the rear foot at the braking step's length, the rear leg at
+            // its reach) it keeps the fixed law (module docs of `double_support`).
+            let orbit = if self.stand_hold.is_none() {
+                OrbitTable::of(&self.geometry(), &self.gait)
+            } else {
+                None
+            };
+            let speed_mps = orbit
+                .and_then(|table| self.orbit_speed(&table, to, m.other_foot_xz_m, leg_q))
+                .unwrap_or(LAUNCH_SPEED_MPS.max(pass_mps));
             Launch {
                 start_t_s: t_s,
                 from: m.pose,
-                to: [x, z, m.pose[2]],
+                to,
+                orbit,
                 speed_mps,
                 other_foot_xz_m: m.other_foot_xz_m,
                 leg_q: *leg_q,
@@ -114,6 +131,57 @@ impl Controller {
                 last_t_s: t_s,
             }
         });
+    }
+
+    /// The forward torso speed at which the launch's end pose `to` (the rear foot at
+    /// `other_foot_xz_m`) has the planned orbit's angular momentum about the stance foot at its
+    /// stance-leg angle, σ*(θ) of `table`, m/s. `None` if the kinematics fail.
+    fn orbit_speed(
+        &self,
+        table: &OrbitTable,
+        to: [f64; 3],
+        other_foot_xz_m: [f64; 2],
+        warm: &[f64; LEG_SLOTS],
+    ) -> Option<f64> {
+        let g = self.geometry();
+        let unit = [1.0, 0.0, 0.0];
+        let (q, dq) = g.solve(self.stance, to, unit, other_foot_xz_m, warm)?;
+        let sigma_per_mps = g.angular_momentum(to, unit, &q, &dq)?;
+        let theta = g.stance_leg_angle(self.stance, to, &q)?;
+        let v = table.sigma_at(theta) / sigma_per_mps;
+        (v.is_finite() && v > 0.0).then_some(v)
+    }
+
+    /// Whether the launch has reached the planned orbit: the measured angular momentum about
+    /// the stance foot at least σ*(θ) at the measured stance-leg angle (`orbit_table`), once
+    /// [`LAUNCH_ORBIT_EARLIEST_S`] of it have passed. Always false without a table.
+    pub(super) fn launch_on_orbit(
+        &self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+    ) -> bool {
+        let Some(launch) = self.launch else {
+            return false;
+        };
+        let Some(table) = launch.orbit else {
+            return false;
+        };
+        if t_s - launch.start_t_s < LAUNCH_ORBIT_EARLIEST_S {
+            return false;
+        }
+        let g = self.geometry();
+        let pitch = self.estimator.pitch_rad();
+        let pitch_rate = self.estimator.pitch_rate_rad_s();
+        let Some(m) = g.measure(self.stance, pitch, pitch_rate, leg_q, leg_dq) else {
+            return false;
+        };
+        let sigma = g.angular_momentum(m.pose, m.rate, leg_q, leg_dq);
+        let theta = g.stance_leg_angle(self.stance, m.pose, leg_q);
+        match (sigma, theta) {
+            (Some(s), Some(th)) => s >= table.sigma_at(th),
+            _ => false,
+        }
     }
 
     /// The launch's joint targets at `t_s`: both feet held, the torso on its quintic (pitch
