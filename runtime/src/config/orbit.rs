@@ -85,9 +85,11 @@ impl OrbitConfig {
 mod tests {
     use super::*;
 
+    type Spoil = fn(&mut OrbitConfig);
+
     #[test]
     fn bad_orbit_gains_are_refused_naming_the_field_and_value() {
-        let cases: [(&str, fn(&mut OrbitConfig)); 4] = [
+        let cases: [(&str, Spoil); 4] = [
             ("orbit.gain_rad_per_mps", |c| c.gain_rad_per_mps = f64::NAN),
             ("orbit.max_lean_rad", |c| c.max_lean_rad = 0.8),
             ("orbit.max_lean_rate_rad_s", |c| {

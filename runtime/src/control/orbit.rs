@@ -53,7 +53,8 @@
 //! # What it does (measured 2026-12-05, seeds 1–5)
 //! - The shipped gait from its planned state (`adam run --backend sim --seed s`, 30 s): without
 //!   the lever its steps take 0.924–0.970 s (planned 0.900 s) and it drifts −0.11 … −0.35 m on
-//!   the belt; with it (k = 0.1) 0.905–0.929 s and −0.14 … +0.005 m; k = 0.15: 0.898–0.918 s,
+//!   the belt; with it (k = 0.1, δ̇_max = 1.5 rad/s) 0.905–0.929 s and −0.14 … +0.005 m, as
+//!   shipped (δ̇_max = 0.5 rad/s) 0.901–0.928 s and −0.134 … +0.028 m; k = 0.15: 0.898–0.918 s,
 //!   −0.10 … +0.04 m; k = 0.2: 0.895–0.908 s, −0.02 … +0.05 m.
 //! - The re-planned gait (`runtime/tests/fixtures/adam_codesign_graded.json`) from Stand onto a
 //!   belt at 0.25 m/s (`runtime/tests/restart_sim.rs`, `the_replanned_gait_walks_on_from_stand`):
@@ -177,7 +178,7 @@ pub(super) fn pose_at(
         let th = theta(&q)?;
         q[2] = pitch + 1e-6;
         let slope = (theta(&q)? - th) / 1e-6;
-        if !(slope.abs() > 0.1) {
+        if slope.abs().partial_cmp(&0.1) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         pitch -= (th - target) / slope;
@@ -234,7 +235,7 @@ impl OrbitTable {
         let h = 1.0 / (ORBIT_SAMPLES - 1) as f64;
         for k in 1..ORBIT_SAMPLES {
             s2 += mass_g * h * (kappa[k - 1] * com[k - 1] + kappa[k] * com[k]);
-            if !(s2 > 0.0) || sigma0 <= 0.0 {
+            if s2.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || sigma0 <= 0.0 {
                 return Err(bad(format!(
                     "the planned orbit stops at τ = {:.3} (σ*² = {s2:.3e})",
                     k as f64 * h

@@ -212,8 +212,8 @@ impl Controller {
         // and through the hips' damping it chattered them (measured: false impacts).
         let (lean, _rate) = self.orbit.update(t_s, eval.phase, sigma, self.stance, on);
         let sign = self.orbit.sign;
-        for i in 0..OUTPUTS {
-            eval.y[i] += sign * LEAN[i] * lean;
+        for (y, l) in eval.y.iter_mut().zip(LEAN) {
+            *y += sign * l * lean;
         }
     }
 
