@@ -12,11 +12,13 @@
 mod bringup;
 pub mod calibration;
 mod imu;
+mod orbit;
 mod speed;
 
 pub use bringup::BringupConfig;
 pub use calibration::{CalibrationConfig, JointCalibration};
 pub use imu::{ImuConfig, VN100_BAUD_RATES_BPS};
+pub use orbit::OrbitConfig;
 pub use speed::{PositionSource, SpeedConfig};
 
 use crate::slots::{SlotLayout, LEG_SLOTS, MAX_HELD, SLOTS};
@@ -372,6 +374,9 @@ pub struct RuntimeConfig {
     /// Speed control on the treadmill (absent: [`SpeedConfig::default`]).
     #[serde(default)]
     pub speed: SpeedConfig,
+    /// The within-step orbit lever (absent: [`OrbitConfig::default`], on).
+    #[serde(default)]
+    pub orbit: OrbitConfig,
     /// How each leg motor maps to its joint (absent: the identity).
     #[serde(default)]
     pub calibration: CalibrationConfig,
@@ -670,6 +675,7 @@ impl RuntimeConfig {
             e.touchdown_pitch_sigma_rad,
         )?;
         self.speed.validate(origin)?;
+        self.orbit.validate(origin)?;
         self.calibration.validate(origin)?;
         self.bringup.validate(origin)?;
         self.imu.validate(origin)?;

@@ -55,6 +55,7 @@
 
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
+use super::orbit::OrbitLever;
 use super::speed::{SpeedLibrary, SpeedRegulator, StepLever};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
@@ -152,6 +153,8 @@ pub struct Controller {
     regulator: SpeedRegulator,
     /// The step-length lever of the gait walked, and this step's offset (speed control).
     step_lever: StepLever,
+    /// The within-step orbit lever (`runtime::control::orbit`).
+    orbit: OrbitLever,
 }
 
 impl Controller {
@@ -231,6 +234,7 @@ impl Controller {
         })?;
         let step_lever =
             StepLever::of(&geometry, &gait_table, gait.step_length_m).unwrap_or_default();
+        let orbit = OrbitLever::new(&config.orbit, &geometry, (gait, &gait_table), library)?;
         let library = SpeedLibrary::new(
             library,
             (gait, &gait_table),
@@ -305,6 +309,7 @@ impl Controller {
             library,
             regulator: SpeedRegulator::new(&config.speed, gait.speed_mps),
             step_lever,
+            orbit,
             model,
         })
     }
@@ -672,6 +677,8 @@ impl Controller {
                 if self.state == ControlState::Stand {
                     self.stand_commands(&mut out.commands);
                 } else {
+                    self.lean(t, &leg_q, &leg_dq, &mut eval);
+                    (y_des, dy_des) = (eval.y, eval.dy);
                     self.walk_commands(&eval, &mut out.commands);
                 }
             }
@@ -750,6 +757,7 @@ impl Controller {
             }
         }
         library.blend_into(sigma, &mut self.gait, &mut self.lunge, &mut self.step_lever);
+        self.orbit.select(sigma);
         self.step_lever.offset_m = self.regulator.status.step_offset_m;
         let span_new = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
         // The same stance-leg angle rate, in the new gait's phase units.

@@ -6,6 +6,7 @@
 //! | [`tick`] | [`TickInput`], [`TickOutput`], [`Status`], [`JointCommand`], [`OperatorCommand`], [`ControlState`] |
 //! | [`controller`] | the [`Controller`]: state machine and tick; its Walk evaluation and joint commands |
 //! | `gait_table` | the gait in fixed arrays: Bézier outputs, stance relabeling, feed-forward |
+//! | `orbit` | the within-step orbit lever: the planned momentum about the stance foot σ*(τ), the torso lean that pulls σ back onto it |
 //! | `speed` | treadmill speed control: the gait library by speed, interpolated at impact; the step-to-step regulator and the belt-position loop |
 //! | `transitions` | ramp, launch, start blend, braking step; minimum-jerk blends |
 //! | `orbit_table` | the planned orbit's stance-leg angular momentum σ*(θ) (zero dynamics), for the launch's hand-over |
@@ -15,6 +16,7 @@ pub mod controller;
 mod double_support;
 mod gait_table;
 mod orbit_table;
+mod orbit;
 mod speed;
 pub mod tick;
 mod transitions;

@@ -4,7 +4,10 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
+use crate::control::double_support::Geometry;
+use crate::control::orbit::{pinned, LEAN};
 use crate::control::speed::LEVER_BLEND_FROM;
+use crate::control::tick::ControlState;
 use crate::control::transitions::{blend_weight, BRAKE_BLEND_FROM, START_KNEE_BLEND_SPAN};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
 use model::robot::MAX_DOF;
@@ -163,6 +166,54 @@ impl Controller {
             dy,
             foot_height_m,
             touchdown,
+        }
+    }
+
+    /// The orbit lever (`runtime::control::orbit`): leans the torso (stance and swing hip
+    /// together) by the lever's rate-limited lean, toward the planned orbit's momentum about the
+    /// stance foot in a Walk step, back to zero otherwise (a Stop, the braking step, and while
+    /// the speed control switches library gaits unless `orbit.with_speed_control`).
+    pub(super) fn lean(
+        &mut self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+        eval: &mut WalkEval,
+    ) {
+        if !self.orbit.enabled() {
+            return;
+        }
+        // Off while the speed control switches library gaits (unless asked for): measured worse.
+        let switching = self.library.is_some() && self.regulator.active();
+        let on = self.state == ControlState::Walk
+            && !self.braking
+            && (!switching || self.orbit.with_speed_control);
+        let sigma = if on {
+            let mut q = self.q_template;
+            let mut dq = [0.0; MAX_DOF];
+            q[2] = self.estimator.pitch_rad();
+            dq[2] = self.estimator.pitch_rate_rad_s();
+            for k in 0..LEG_SLOTS {
+                q[self.leg_coord[k]] = leg_q[k];
+                dq[self.leg_coord[k]] = leg_dq[k];
+            }
+            let geometry = Geometry {
+                model: &self.model,
+                legs: &self.legs,
+                dof: self.dof,
+                q_template: &self.q_template,
+                leg_coord: &self.leg_coord,
+            };
+            pinned(&geometry, &q, &dq, self.stance).map_or(f64::NAN, |p| p.sigma)
+        } else {
+            f64::NAN
+        };
+        // The lean's rate is not fed to ẏ^d: it is the derivative of a filtered noisy error,
+        // and through the hips' damping it chattered them (measured: false impacts).
+        let (lean, _rate) = self.orbit.update(t_s, eval.phase, sigma, self.stance, on);
+        let sign = self.orbit.sign;
+        for (y, l) in eval.y.iter_mut().zip(LEAN) {
+            *y += sign * l * lean;
         }
     }
 
