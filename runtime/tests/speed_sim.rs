@@ -72,7 +72,7 @@ fn max_position_after(rows: &[SpeedRow], after_s: f64) -> f64 {
 /// the belt's (the acceptance threshold), and within ±0.16 m of the belt centre after 10 s,
 /// seeds 1–5 (measured with the step lever and the shipped gains, 2026-12-05: 0.147, 0.127,
 /// 0.110, 0.115, 0.123 m; before the lever: 0.146, 0.133, 0.129, 0.121, 0.125 m; with σ
-/// following the belt speed instead of the command, `command_share = 0`: 0.139–0.188 m). The
+/// following the belt speed instead of the command, the removed `command_share = 0`: 0.139–0.188 m). The
 /// issue's ±0.10 m is not met yet: the library's gaits walk up to 30 % faster than planned in
 /// the simulator (0.25 → 0.29 m/s, 0.30 → 0.38 m/s open loop).
 /// Gains tried with the law before the lever over seeds 1–5 (k_p, k_s, k_i, σ rate; worst

@@ -25,10 +25,14 @@ pub(crate) const RUNTIME_CONFIG: &str = "configs/runtime/adam.toml";
 pub(crate) const CONFIG_DIR_ENV: &str = "ADAM_CONFIG_DIR";
 
 /// The files shipped in `configs/`, embedded: (path under `configs/`, contents).
-const EMBEDDED: [(&str, &str); 16] = [
+const EMBEDDED: [(&str, &str); 17] = [
     (
         "runtime/adam.toml",
         include_str!("../../configs/runtime/adam.toml"),
+    ),
+    (
+        "runtime/adam_treadmill.toml",
+        include_str!("../../configs/runtime/adam_treadmill.toml"),
     ),
     (
         "foxglove/adam.json",

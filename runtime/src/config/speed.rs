@@ -12,20 +12,29 @@ use serde::{Deserialize, Serialize};
 /// last stride's (two steps) v̄_k, the belt speed b set by the operator and the estimated
 /// position p on the belt (+ forward):
 /// ```text
-/// v_cmd = clamp(b + offset − position_gain_per_s · p, library range)
+/// k_p   = position_gain_per_step / T̄_k  (T̄_k: the last stride's mean step duration;
+///         position_gain_per_s if position_gain_per_step = 0)
+/// v_cmd = clamp(b + offset − k_p · p, library range)
 /// e_k   = v_cmd,k−1 − v̄_k          (speed error of the last stride against its command)
 /// I    += integral_gain · e_k                           (|I| ≤ integral_limit_mps)
-/// u     = b + offset
-/// σ     = clamp(u + command_share · (v_cmd − u) + speed_gain · e_k + I, library range,
+/// σ     = clamp(v_cmd + speed_gain · e_k + I, library range,
 ///               σ_prev ± max_change_per_step_mps)          (the library gait of the next step)
-/// Δℓ    = clamp(step_length_gain_s · (v_k − v_cmd), ± max_step_offset_m)
-///                                        (the next step lands Δℓ longer: the step lever)
+/// Δℓ    = clamp(g · (v_k − v_cmd), ± max_step_offset_m)   (the next step lands Δℓ longer:
+///         g = step_length_gain_s after a fast step,        the step lever)
+///             slow_step_length_gain_s after a slow one
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpeedConfig {
     /// Position loop: commanded speed per metre of position on the belt, (m/s)/m = 1/s.
     pub position_gain_per_s: f64,
+    /// Position loop per step (0, the default: off, `position_gain_per_s` acts): the commanded
+    /// speed per metre of position is this over the last stride's mean step duration, 1/s. The
+    /// loop acts once a step, so its gain per step sets its stability: the same 0.3 /s is 0.3
+    /// of the error per 1 s step at 0.15 m/s and 0.17 per 0.57 s step at 0.30 m/s
+    /// (`runtime::control::speed`; 0.17 in `configs/runtime/adam_treadmill.toml`).
+    #[serde(default = "default_position_gain_per_step")]
+    pub position_gain_per_step: f64,
     /// Proportional gain of the step-to-step speed regulator (library speed per speed error).
     pub speed_gain: f64,
     /// Integral gain of the regulator, per step.
@@ -35,19 +44,19 @@ pub struct SpeedConfig {
     /// The library speed changes by at most this much from one step to the next, m/s: each
     /// switch starts the new gait close to its own orbit.
     pub max_change_per_step_mps: f64,
-    /// The step lever: the next step lands this much longer per m/s that the last stride was
+    /// The step lever: the next step lands this much longer per m/s that the last step was
     /// faster than the command, m/(m/s) = s (0: off).
     #[serde(default = "default_step_length_gain_s")]
     pub step_length_gain_s: f64,
     /// The step lever's offset stays within ± this, m.
     #[serde(default = "default_max_step_offset_m")]
     pub max_step_offset_m: f64,
-    /// How much of the position loop's command the library speed follows: σ starts from
-    /// b + offset + command_share·(v_cmd − b − offset) (0: the operator's speed, the position
-    /// acting through the integral and the step lever only; 1, the default: v_cmd). Within
-    /// [0, 1]; `runtime::control::speed` compares the two ends.
-    #[serde(default = "default_command_share")]
-    pub command_share: f64,
+    /// The step lever's gain after a step slower than the command, m/(m/s) = s: the next step
+    /// lands this much shorter per m/s too slow (default: `step_length_gain_s`'s 0.1; 0 in
+    /// `configs/runtime/adam_treadmill.toml`: on the shipped library a shorter step after a
+    /// slow one stalled more walks at 0.15–0.20 m/s, `runtime::control::speed`).
+    #[serde(default = "default_step_length_gain_s")]
+    pub slow_step_length_gain_s: f64,
     /// Where the position on the belt comes from: leg odometry (the belt speed set by the
     /// operator integrated against the measured steps).
     #[serde(default)]
@@ -71,17 +80,22 @@ impl Default for SpeedConfig {
     fn default() -> Self {
         Self {
             position_gain_per_s: 0.3,
+            position_gain_per_step: default_position_gain_per_step(),
             speed_gain: 0.5,
             integral_gain: 0.1,
             integral_limit_mps: 0.1,
             max_change_per_step_mps: 0.02,
             step_length_gain_s: default_step_length_gain_s(),
             max_step_offset_m: default_max_step_offset_m(),
-            command_share: 1.0,
+            slow_step_length_gain_s: default_step_length_gain_s(),
             position_source: PositionSource::Odometry,
             library: None,
         }
     }
+}
+
+fn default_position_gain_per_step() -> f64 {
+    0.0
 }
 
 fn default_step_length_gain_s() -> f64 {
@@ -92,15 +106,12 @@ fn default_max_step_offset_m() -> f64 {
     0.04
 }
 
-fn default_command_share() -> f64 {
-    1.0
-}
-
 impl SpeedConfig {
     /// Finite, non-negative gains and limit; errors name `origin`, the field and the value.
     pub fn validate(&self, origin: &str) -> crate::Result<()> {
         for (field, v) in [
             ("speed.position_gain_per_s", self.position_gain_per_s),
+            ("speed.position_gain_per_step", self.position_gain_per_step),
             ("speed.speed_gain", self.speed_gain),
             ("speed.integral_gain", self.integral_gain),
             ("speed.integral_limit_mps", self.integral_limit_mps),
@@ -110,6 +121,10 @@ impl SpeedConfig {
             ),
             ("speed.step_length_gain_s", self.step_length_gain_s),
             ("speed.max_step_offset_m", self.max_step_offset_m),
+            (
+                "speed.slow_step_length_gain_s",
+                self.slow_step_length_gain_s,
+            ),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {
@@ -119,14 +134,6 @@ impl SpeedConfig {
                     reason: "must be finite and not negative".into(),
                 });
             }
-        }
-        if !(0.0..=1.0).contains(&self.command_share) {
-            return Err(RuntimeError::InvalidField {
-                origin: origin.to_string(),
-                field: "speed.command_share".into(),
-                value: self.command_share.to_string(),
-                reason: "must be within [0, 1] (0: the library speed follows the operator's speed, 1: the position loop's command)".into(),
-            });
         }
         // Gains that large overshoot every step (the loop is discrete: one update per step).
         for (field, v) in [
@@ -152,23 +159,17 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_command_share_outside_zero_to_one_is_refused_naming_the_field_and_value() {
-        for bad in [-0.1, 1.5, f64::NAN] {
+    fn negative_or_non_finite_gains_are_refused_naming_the_field_and_value() {
+        for bad in [-0.1, f64::INFINITY, f64::NAN] {
             let c = SpeedConfig {
-                command_share: bad,
+                slow_step_length_gain_s: bad,
                 ..SpeedConfig::default()
             };
             let e = c.validate("adam.toml").expect_err("refused").to_string();
             assert!(e.contains("adam.toml"), "{e}");
-            assert!(e.contains("speed.command_share"), "{e}");
+            assert!(e.contains("speed.slow_step_length_gain_s"), "{e}");
             assert!(e.contains(&bad.to_string()), "{e}");
         }
-        for good in [0.0, 0.5, 1.0] {
-            let c = SpeedConfig {
-                command_share: good,
-                ..SpeedConfig::default()
-            };
-            assert!(c.validate("adam.toml").is_ok());
-        }
+        assert!(SpeedConfig::default().validate("adam.toml").is_ok());
     }
 }

@@ -1,0 +1,356 @@
+//! The step-to-step speed regulator, the step lever and the belt-position loop: one update per
+//! impact (the law: the parent module's docs).
+
+use super::super::tick::{OperatorCommand, SpeedStatus};
+use crate::config::SpeedConfig;
+
+/// The regulator and the position loop: what the operator set and what the steps measured.
+#[derive(Clone, Copy, Debug)]
+pub(in crate::control) struct SpeedRegulator {
+    position_gain_per_s: f64,
+    position_gain_per_step: f64,
+    speed_gain: f64,
+    integral_gain: f64,
+    integral_limit_mps: f64,
+    max_change_per_step_mps: f64,
+    step_length_gain_s: f64,
+    max_step_offset_m: f64,
+    slow_step_length_gain_s: f64,
+    /// Belt travel since the last impact, m.
+    belt_travel_m: f64,
+    /// Time of the last [`SpeedRegulator::advance`], s.
+    last_t_s: Option<f64>,
+    /// The step before the last: length, m, and duration, s (the error is measured over the
+    /// last two steps, a stride: left and right steps differ).
+    previous_step: Option<(f64, f64)>,
+    pub(in crate::control) status: SpeedStatus,
+}
+
+impl SpeedRegulator {
+    /// A regulator whose first library speed is `start_mps` (the gait walked before speed
+    /// control begins).
+    pub(in crate::control) fn new(config: &SpeedConfig, start_mps: f64) -> Self {
+        let mut status = SpeedStatus::UNKNOWN;
+        status.library_mps = start_mps;
+        Self {
+            position_gain_per_s: config.position_gain_per_s,
+            position_gain_per_step: config.position_gain_per_step,
+            speed_gain: config.speed_gain,
+            integral_gain: config.integral_gain,
+            integral_limit_mps: config.integral_limit_mps,
+            max_change_per_step_mps: config.max_change_per_step_mps,
+            step_length_gain_s: config.step_length_gain_s,
+            max_step_offset_m: config.max_step_offset_m,
+            slow_step_length_gain_s: config.slow_step_length_gain_s,
+            belt_travel_m: 0.0,
+            last_t_s: None,
+            previous_step: None,
+            status,
+        }
+    }
+
+    /// Whether a belt speed is known (speed control runs only then).
+    pub(in crate::control) fn active(&self) -> bool {
+        self.status.belt_mps.is_finite()
+    }
+
+    /// Takes an operator's speed command; false for any other command.
+    pub(in crate::control) fn operator(&mut self, cmd: OperatorCommand) -> bool {
+        let s = &mut self.status;
+        match cmd {
+            OperatorCommand::Belt { speed_mps } if speed_mps.is_finite() => {
+                s.belt_mps = speed_mps;
+            }
+            OperatorCommand::Offset { speed_mps } if speed_mps.is_finite() => {
+                s.offset_mps = speed_mps;
+            }
+            OperatorCommand::Nudge { delta_mps } if delta_mps.is_finite() => {
+                s.offset_mps += delta_mps;
+            }
+            _ => return false,
+        }
+        true
+    }
+
+    /// Integrates the belt's travel up to `t_s` (every tick).
+    pub(in crate::control) fn advance(&mut self, t_s: f64) {
+        if let (Some(t0), true) = (self.last_t_s, self.active()) {
+            let dt = (t_s - t0).clamp(0.0, 0.1);
+            self.belt_travel_m += self.status.belt_mps * dt;
+        }
+        self.last_t_s = Some(t_s);
+    }
+
+    /// Forgets the steps (a walk begins): position 0, no integral, no belt travel.
+    pub(in crate::control) fn restart(&mut self) {
+        self.belt_travel_m = 0.0;
+        self.previous_step = None;
+        let s = &mut self.status;
+        s.position_m = 0.0;
+        s.integral_mps = 0.0;
+        s.step_offset_m = 0.0;
+        s.step_speed_mps = f64::NAN;
+        s.commanded_mps = f64::NAN;
+    }
+
+    /// The step that just ended at an impact: `length_m` over `duration_s`. Updates the
+    /// position, the commanded speed, the integral and the next step's length offset
+    /// (`status.step_offset_m`), and returns the library speed σ of the next step (clamped to
+    /// `range_mps`).
+    pub(in crate::control) fn on_impact(
+        &mut self,
+        length_m: f64,
+        duration_s: f64,
+        range_mps: (f64, f64),
+    ) -> f64 {
+        let (lo, hi) = range_mps;
+        let s = &mut self.status;
+        let measured = length_m.is_finite() && duration_s > 0.0;
+        s.step_length_m = length_m;
+        s.step_duration_s = duration_s;
+        if measured {
+            s.step_speed_mps = length_m / duration_s;
+            s.position_m += length_m - self.belt_travel_m;
+        }
+        self.belt_travel_m = 0.0;
+        // The speed error of the last stride (the step that ended and the one before) against
+        // the command it walked under.
+        let (stride_mps, step_s) = match self.previous_step {
+            Some((l0, t0)) if measured => {
+                ((l0 + length_m) / (t0 + duration_s), 0.5 * (t0 + duration_s))
+            }
+            _ => (s.step_speed_mps, duration_s),
+        };
+        self.previous_step = measured.then_some((length_m, duration_s));
+        let error = if measured && s.commanded_mps.is_finite() {
+            s.commanded_mps - stride_mps
+        } else {
+            0.0
+        };
+        // The position loop's gain per second, or per step over the last stride's mean step.
+        let k_p = if self.position_gain_per_step > 0.0 && measured {
+            self.position_gain_per_step / step_s
+        } else {
+            self.position_gain_per_s
+        };
+        s.requested_mps = s.belt_mps + s.offset_mps - k_p * s.position_m;
+        s.commanded_mps = s.requested_mps.clamp(lo, hi);
+        s.clamped = s.commanded_mps != s.requested_mps;
+        let integral = (s.integral_mps + self.integral_gain * error)
+            .clamp(-self.integral_limit_mps, self.integral_limit_mps);
+        // The library gait of the command, plus the step-to-step feedback.
+        let sigma = s.commanded_mps + self.speed_gain * error + integral;
+        // Anti-windup: the integral only grows while σ is inside the library.
+        if (lo..=hi).contains(&sigma) || integral.abs() < s.integral_mps.abs() {
+            s.integral_mps = integral;
+        }
+        let last = if s.library_mps.is_finite() {
+            s.library_mps.clamp(lo, hi)
+        } else {
+            s.commanded_mps
+        };
+        let r = self.max_change_per_step_mps;
+        s.library_mps = sigma.clamp(lo, hi).clamp(last - r, last + r);
+        // The step lever: a step faster than the command lands the next step longer (more
+        // speed lost in its impact), a slower one shorter. The last step's speed, not the
+        // stride's: averaged over two steps the lever came a step late and overshot (stalls).
+        // After a slow step the gain is `slow_step_length_gain_s` (0 in the treadmill config: a
+        // shorter step after a slow one stalled more walks on the shipped library; module docs).
+        let m = self.max_step_offset_m;
+        s.step_offset_m = if measured && s.commanded_mps.is_finite() {
+            let fast = s.step_speed_mps - s.commanded_mps;
+            let gain = if fast < 0.0 {
+                self.slow_step_length_gain_s
+            } else {
+                self.step_length_gain_s
+            };
+            (gain * fast).clamp(-m, m)
+        } else {
+            0.0
+        };
+        s.library_mps
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    fn regulator(config: &SpeedConfig) -> SpeedRegulator {
+        let mut r = SpeedRegulator::new(config, 0.25);
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        r
+    }
+
+    #[test]
+    fn position_integrates_steps_against_the_belt_and_pulls_the_command_back() {
+        let config = SpeedConfig {
+            position_gain_per_step: 0.0,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        for k in 0..=800 {
+            r.advance(k as f64 * 1e-3);
+        }
+        // 0.8 s of belt at 0.25 m/s is 0.2 m; a 0.24 m step puts the robot 4 cm forward.
+        let sigma = r.on_impact(0.24, 0.8, (0.15, 0.35));
+        assert!((r.status.position_m - 0.04).abs() < 1e-9);
+        // Forward of the centre: the command is below the belt speed by k_p·p ...
+        let command = 0.25 - config.position_gain_per_s * 0.04;
+        assert!((r.status.commanded_mps - command).abs() < 1e-9);
+        // ... the library gait follows the command (no stride measured against a command yet,
+        // so no error, no integral) ...
+        assert!((sigma - command).abs() < 1e-12, "σ = {sigma}");
+        // ... and the step was faster than the command: the next one lands longer.
+        let offset = config.step_length_gain_s * (0.3 - command);
+        assert!(offset > 0.0);
+        assert!((r.status.step_offset_m - offset).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_position_gain_per_step_pulls_by_it_over_the_mean_step_duration() {
+        let config = SpeedConfig {
+            position_gain_per_step: 0.17,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        // Two steps of 0.6 and 0.8 s, the robot 0.1 m behind the centre after them.
+        r.belt_travel_m = 0.15;
+        r.on_impact(0.15, 0.6, (0.15, 0.35));
+        r.belt_travel_m = 0.3;
+        r.on_impact(0.2, 0.8, (0.15, 0.35));
+        assert!((r.status.position_m + 0.1).abs() < 1e-12);
+        let k_p = config.position_gain_per_step / 0.7;
+        assert!(
+            (r.status.requested_mps - (0.25 + k_p * 0.1)).abs() < 1e-12,
+            "{}",
+            r.status.requested_mps
+        );
+        // Slower steps, a smaller gain per second: one of 1.0 s after 1.0 s.
+        let mut r = regulator(&config);
+        r.belt_travel_m = 0.25;
+        r.on_impact(0.25, 1.0, (0.15, 0.35));
+        r.belt_travel_m = 0.35;
+        r.on_impact(0.25, 1.0, (0.15, 0.35));
+        let k_p = config.position_gain_per_step / 1.0;
+        assert!((r.status.requested_mps - (0.25 + k_p * 0.1)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_slow_stride_raises_the_next_gait_by_the_speed_gain() {
+        let config = SpeedConfig {
+            speed_gain: 0.5,
+            integral_gain: 0.0,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        // The first step sets the command; the second, 0.05 m/s slow (the stride 0.025 m/s
+        // slow), with the robot put back at the centre: σ = v_cmd + k_s·0.025.
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.35));
+        r.status.position_m = 0.0;
+        r.belt_travel_m = 0.16;
+        let sigma = r.on_impact(0.16, 0.8, (0.15, 0.35));
+        assert!((sigma - (0.25 + 0.5 * 0.025)).abs() < 1e-12, "σ = {sigma}");
+    }
+
+    #[test]
+    fn the_integral_removes_a_steady_bias() {
+        let mut r = regulator(&SpeedConfig::default());
+        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
+        r.status.position_m = 0.0;
+        // Each step walks 0.02 m/s slower than the gait it was given (a bias), the belt
+        // travel matched to the step so the position stays put.
+        let mut sigma = 0.25;
+        for _ in 0..80 {
+            let v = sigma - 0.02;
+            r.belt_travel_m = v * 0.8;
+            sigma = r.on_impact(v * 0.8, 0.8, (0.15, 0.35));
+        }
+        // The command settles where the robot walks the belt speed: σ = 0.27, the bias.
+        assert!((sigma - 0.27).abs() < 1e-3, "σ = {sigma}");
+        assert!((r.status.integral_mps - 0.02).abs() < 1e-3);
+    }
+
+    #[test]
+    fn a_fast_step_lands_the_next_step_longer_within_the_limit() {
+        let config = SpeedConfig::default();
+        let mut r = regulator(&config);
+        // Without a step measured: the gait's own step.
+        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
+        assert_eq!(r.status.step_offset_m, 0.0);
+        // A step at 0.28 m/s on a 0.25 m/s belt, the robot at the centre: 0.03 m/s fast.
+        r.status.position_m = 0.0;
+        r.belt_travel_m = 0.224;
+        r.on_impact(0.224, 0.8, (0.15, 0.35));
+        assert_eq!(r.status.commanded_mps, 0.25);
+        let expected = config.step_length_gain_s * 0.03;
+        assert!(expected > 0.0 && expected < config.max_step_offset_m);
+        assert!(
+            (r.status.step_offset_m - expected).abs() < 1e-9,
+            "{:?}",
+            r.status
+        );
+        // A very fast one: at most the limit.
+        r.status.position_m = 0.0;
+        r.on_impact(0.4, 0.5, (0.15, 0.35));
+        assert_eq!(r.status.step_offset_m, config.max_step_offset_m);
+        // A restart forgets it.
+        r.restart();
+        assert_eq!(r.status.step_offset_m, 0.0);
+    }
+
+    #[test]
+    fn after_a_slow_step_the_lever_takes_its_slow_side_gain() {
+        // None: no shorter step after a slow one.
+        let config = SpeedConfig {
+            slow_step_length_gain_s: 0.0,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
+        r.status.position_m = 0.0;
+        r.belt_travel_m = 0.16;
+        r.on_impact(0.16, 0.8, (0.15, 0.35));
+        assert_eq!(r.status.commanded_mps, 0.25);
+        assert_eq!(r.status.step_offset_m, 0.0);
+        // With a slow-side gain: shorter by it, at most the limit.
+        let config = SpeedConfig {
+            slow_step_length_gain_s: 0.5,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
+        r.status.position_m = 0.0;
+        r.belt_travel_m = 0.16;
+        r.on_impact(0.16, 0.8, (0.15, 0.35));
+        let expected = 0.5 * (0.2 - 0.25);
+        assert!(expected < 0.0);
+        assert!((r.status.step_offset_m - expected).abs() < 1e-12);
+        r.status.position_m = 0.0;
+        r.on_impact(0.01, 2.0, (0.15, 0.35));
+        assert_eq!(r.status.step_offset_m, -config.max_step_offset_m);
+    }
+
+    #[test]
+    fn commands_outside_the_library_are_clamped_and_flagged() {
+        let config = SpeedConfig {
+            position_gain_per_step: 0.0,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.5 }));
+        let sigma = r.on_impact(0.2, 0.8, (0.15, 0.35));
+        assert!(r.status.clamped);
+        let k_p = config.position_gain_per_s;
+        assert_eq!(r.status.requested_mps, 0.5 - k_p * r.status.position_m);
+        assert_eq!(r.status.commanded_mps, 0.35);
+        // ... and the library speed moves towards it by at most the step limit.
+        assert!((sigma - 0.27).abs() < 1e-12, "σ = {sigma}");
+        assert!(!r.operator(OperatorCommand::Walk));
+        assert!(r.operator(OperatorCommand::Nudge { delta_mps: 0.025 }));
+        assert!(r.operator(OperatorCommand::Nudge { delta_mps: 0.025 }));
+        assert!((r.status.offset_mps - 0.05).abs() < 1e-15);
+    }
+}
