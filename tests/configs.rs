@@ -94,3 +94,32 @@ fn every_config_file_loads_and_validates() {
         root.display()
     );
 }
+
+/// `configs/runtime/adam_treadmill.toml` is `adam.toml` with speed control on: every section but
+/// `[speed]` is the same, so the two cannot drift apart.
+#[test]
+fn the_treadmill_config_is_the_shipped_config_but_for_its_speed_section() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/runtime");
+    let read = |name: &str| -> toml::Table {
+        let text = std::fs::read_to_string(dir.join(name)).expect(name);
+        let mut table: toml::Table = text.parse().unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            table.remove("speed").is_some(),
+            "{name}: no [speed] section"
+        );
+        table
+    };
+    let (shipped, treadmill) = (read("adam.toml"), read("adam_treadmill.toml"));
+    for (key, value) in &shipped {
+        assert_eq!(
+            treadmill.get(key),
+            Some(value),
+            "[{key}] of adam_treadmill.toml is not adam.toml's"
+        );
+    }
+    let extra: Vec<_> = treadmill
+        .keys()
+        .filter(|k| !shipped.contains_key(*k))
+        .collect();
+    assert!(extra.is_empty(), "adam_treadmill.toml only: {extra:?}");
+}

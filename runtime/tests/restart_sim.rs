@@ -125,8 +125,6 @@ fn the_replanned_gait_walks_again_after_a_stop_with_a_shorter_braking_step() {
 /// step lasts the planned 0.90 s within 25 % (measured 0.87-1.19 s). Before (a fixed 0.20 m/s
 /// launch end speed) the first steps took 0.44-0.60 s, each slower than the last, and seeds 3-5
 /// overshot into a stall (step timeout; `runtime::control::double_support`).
-///
-/// The walk's within-step orbit lever (`runtime::control::orbit`) is on, as shipped.
 #[test]
 fn the_replanned_gait_walks_on_from_stand() {
     let setup = replanned(0.20);

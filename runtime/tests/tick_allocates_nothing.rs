@@ -50,6 +50,8 @@ fn walk_without_allocating_with(phase: PhaseSource, with_library: bool) {
         setup = library(setup);
     }
     setup.config.walk.phase = phase;
+    // The orbit lever (off as shipped) runs in the tick too.
+    setup.config.orbit.enabled = true;
     // No robot here: with the state-based phase the step never ends; the stall check
     // (step timeout) is not what this test is about.
     setup.config.safety.stall_timeout_s = 1e9;

@@ -32,7 +32,7 @@ pub struct OrbitConfig {
 impl Default for OrbitConfig {
     fn default() -> Self {
         Self {
-            enabled: true,
+            enabled: false,
             gain_rad_per_mps: 0.1,
             max_lean_rad: 0.15,
             max_lean_rate_rad_s: 0.5,

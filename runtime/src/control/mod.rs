@@ -15,8 +15,8 @@
 pub mod controller;
 mod double_support;
 mod gait_table;
-mod orbit_table;
 mod orbit;
+mod orbit_table;
 mod speed;
 pub mod tick;
 mod transitions;

@@ -50,6 +50,12 @@
 //! τ_f = 0.8, f = 5 Hz. M·L = 11.4 kg·m for ADAM, so k = 0.1 leans 0.009 rad per kg·m²/s of
 //! momentum error (σ* runs 1.47–3.81 kg·m²/s over the shipped gait's step).
 //!
+//! **Off as shipped** (`enabled = false`, measured 2026-12-05 after the merge): with the lever on,
+//! `tests/faults.rs`'s `delay-1` (1 % of motor replies 2 ms late, so missing for a tick, their
+//! last values held) ends the walk in a step timeout after 6 steps of 0.05 m mean length, with 2
+//! repeated touchdowns; without it the same run rides through. Not yet traced; the lever's
+//! sensitivity to a held sample (or a false touchdown it provokes) is the first suspect.
+//!
 //! # What it does (measured 2026-12-05, seeds 1–5)
 //! - The shipped gait from its planned state (`adam run --backend sim --seed s`, 30 s): without
 //!   the lever its steps take 0.924–0.970 s (planned 0.900 s) and it drifts −0.11 … −0.35 m on

@@ -113,7 +113,15 @@ fn the_planned_orbit_takes_the_gait_s_step_duration() {
 }
 
 fn lever(f: &Fixture) -> OrbitLever {
-    lever_with(f, &OrbitConfig::default())
+    lever_with(f, &on())
+}
+
+/// The shipped gains, the lever on (it is off as shipped).
+fn on() -> OrbitConfig {
+    OrbitConfig {
+        enabled: true,
+        ..OrbitConfig::default()
+    }
 }
 
 fn lever_with(f: &Fixture, config: &OrbitConfig) -> OrbitLever {
@@ -160,7 +168,7 @@ fn the_lean_moves_the_centre_of_mass_but_not_the_swing_foot_nor_the_phase() {
 #[test]
 fn the_law_leans_forward_when_slow_back_when_fast_and_fades_out_at_the_impact() {
     let f = Fixture::shipped();
-    let config = OrbitConfig::default();
+    let config = on();
     let mut l = lever(&f);
     let stance = f.table.first_stance;
     let table = l.table.unwrap();
@@ -206,7 +214,7 @@ fn one_step(f: &Fixture, sigma0: f64, lean: bool) -> Option<(f64, f64)> {
     // A stronger gain than the shipped one: the point is the sign of the law.
     let config = OrbitConfig {
         gain_rad_per_mps: 2.0,
-        ..OrbitConfig::default()
+        ..on()
     };
     let mut l = lever_with(f, &config);
     let table = l.table.unwrap();
