@@ -461,7 +461,7 @@ pub fn quintic(p0: f64, v0: f64, p1: f64, v1: f64, duration_s: f64, t_s: f64) ->
 }
 
 /// Solves the 2 × 2 system `a·x = b`; `None` if `a` is (nearly) singular (a straight knee).
-fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> Option<[f64; 2]> {
+pub(super) fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> Option<[f64; 2]> {
     let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
     let scale = a.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
     // Also refuses NaN.

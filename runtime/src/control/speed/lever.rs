@@ -13,11 +13,11 @@
 //! ([`model::PlanarModel::stance_leg_angle_rate`]). The unit test checks them against central
 //! differences of [`braking_touchdown`].
 
-use super::super::double_support::Geometry;
+use super::super::double_support::{slots, solve2, Geometry};
 use super::super::gait_table::{side_index, GaitTable};
 use super::super::transitions::{braking_touchdown, first_pose_torso};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
-use model::robot::{Side, MAX_DOF};
+use model::robot::MAX_DOF;
 
 /// A step of the lever follows the gait up to this phase, then blends into its longer or
 /// shorter touchdown pose (as the braking step does).
@@ -84,7 +84,7 @@ impl StepLever {
             .into_iter()
             .enumerate()
         {
-            let [hip, knee] = leg_slots(side);
+            let [hip, knee] = slots(side);
             let mut jac = [[0.0; 2]; 2];
             for (col, slot) in [hip, knee].into_iter().enumerate() {
                 let mut unit = [0.0; MAX_DOF];
@@ -127,27 +127,6 @@ impl StepLever {
     pub(in crate::control) fn theta_offset_rad(&self) -> f64 {
         self.offset_m * self.theta_per_m
     }
-}
-
-/// The leg slots (hip, knee) of `side` (the order of [`crate::config::LEG_JOINT_NAMES`]).
-fn leg_slots(side: Side) -> [usize; 2] {
-    match side {
-        Side::Left => [0, 1],
-        Side::Right => [2, 3],
-    }
-}
-
-/// Solves the 2 × 2 system `a·x = b`; `None` if `a` is singular (a straight knee) or not finite.
-fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> Option<[f64; 2]> {
-    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
-    let scale = a.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if det.abs().partial_cmp(&(1e-9 * scale * scale)) != Some(std::cmp::Ordering::Greater) {
-        return None;
-    }
-    Some([
-        (b[0] * a[1][1] - b[1] * a[0][1]) / det,
-        (a[0][0] * b[1] - a[1][0] * b[0]) / det,
-    ])
 }
 
 #[cfg(test)]
