@@ -192,7 +192,10 @@ fn the_emulated_stream_written_to_a_file_parses_back_frame_for_frame() {
 /// emulated sensor at rest, and the safety monitor never finds the IMU stale or implausible.
 /// The overrun limit and the IMU age limit are raised: on this shared test machine neither the
 /// loop nor the emulator thread gets the CPU every millisecond (with the shipped 20 ms limit a
-/// run here tripped once on a 20.02 ms gap: the stale check works, the machine is slow).
+/// run here tripped once on a 20.02 ms gap; with 0.2 s, a CI run with the 2 cores' load average
+/// at 7 tripped on a 0.201 s gap). The stale check itself is tested where time is simulated
+/// (`runtime::safety`, the controller's tests, `tests/faults.rs`); this test is of the driver's
+/// path into the loop, which the sample count checks.
 #[test]
 fn the_control_loop_stands_on_the_vn100_over_a_tty() {
     use drivers::vn100::emulator::{serve, Emulator as Emulated, EmulatorOptions, Pty};
@@ -207,7 +210,7 @@ fn the_control_loop_stands_on_the_vn100_over_a_tty() {
     });
     let mut setup = runtime::Setup::shipped().expect("shipped setup");
     setup.config.loop_.max_overrun_streak = 1000;
-    setup.config.safety.max_imu_age_s = 0.2;
+    setup.config.safety.max_imu_age_s = 1.0;
     let options = setup
         .config
         .imu

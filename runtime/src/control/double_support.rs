@@ -474,50 +474,67 @@ pub(super) fn solve2(a: [[f64; 2]; 2], b: [f64; 2]) -> Option<[f64; 2]> {
     ])
 }
 
+/// The parts a [`Geometry`] borrows, owned: for tests of the modules that use one.
+#[cfg(test)]
+pub(crate) struct GeometryParts {
+    pub(crate) legs: Legs,
+    pub(crate) q_template: [f64; MAX_DOF],
+    pub(crate) leg_coord: [usize; LEG_SLOTS],
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+impl GeometryParts {
+    /// `model`'s legs and leg coordinates, with `q` (the model's coordinates) as the template.
+    pub(crate) fn new(model: &PlanarModel, q: &[f64]) -> Self {
+        let legs = model.legs().unwrap();
+        let mut q_template = [0.0; MAX_DOF];
+        q_template[..model.dof()].copy_from_slice(q);
+        let mut leg_coord = [0; LEG_SLOTS];
+        for (k, name) in crate::config::LEG_JOINT_NAMES.iter().enumerate() {
+            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
+        }
+        Self {
+            legs,
+            q_template,
+            leg_coord,
+        }
+    }
+
+    /// The geometry of `model` (the one these parts were made from).
+    pub(crate) fn geometry<'a>(&'a self, model: &'a PlanarModel) -> Geometry<'a> {
+        Geometry {
+            model,
+            legs: &self.legs,
+            dof: model.dof(),
+            q_template: &self.q_template,
+            leg_coord: &self.leg_coord,
+        }
+    }
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::config::LEG_JOINT_NAMES;
     use crate::Setup;
-    use model::robot::Legs;
 
     /// The shipped robot's double-support kinematics (template: the gait's initial state).
     struct Fixture {
         setup: Setup,
-        legs: Legs,
-        q_template: [f64; MAX_DOF],
-        leg_coord: [usize; LEG_SLOTS],
+        parts: GeometryParts,
     }
 
     impl Fixture {
         fn new() -> Self {
             let setup = Setup::shipped().unwrap();
-            let model = &setup.model;
-            let legs = model.legs().unwrap();
             let q0 = setup.gait.initial_state.clone().unwrap().q;
-            let mut q_template = [0.0; MAX_DOF];
-            q_template[..model.dof()].copy_from_slice(&q0);
-            let mut leg_coord = [0; LEG_SLOTS];
-            for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
-                leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
-            }
-            Self {
-                setup,
-                legs,
-                q_template,
-                leg_coord,
-            }
+            let parts = GeometryParts::new(&setup.model, &q0);
+            Self { setup, parts }
         }
 
         fn geometry(&self) -> Geometry<'_> {
-            Geometry {
-                model: &self.setup.model,
-                legs: &self.legs,
-                dof: self.setup.model.dof(),
-                q_template: &self.q_template,
-                leg_coord: &self.leg_coord,
-            }
+            self.parts.geometry(&self.setup.model)
         }
     }
 
@@ -566,8 +583,8 @@ mod tests {
         let fixture = Fixture::new();
         let g = fixture.geometry();
         let model = &fixture.setup.model;
-        let (dof, leg_coord) = (model.dof(), fixture.leg_coord);
-        let q0 = fixture.q_template[..dof].to_vec();
+        let (dof, leg_coord) = (model.dof(), fixture.parts.leg_coord);
+        let q0 = fixture.parts.q_template[..dof].to_vec();
         // A crouched double-support pose: the right foot at the origin, the left 0.2 m behind.
         let pose = [-0.08, 0.64, 0.03];
         let (leg_q, _) = g

@@ -178,28 +178,15 @@ fn manifold_point(geometry: &Geometry, gait: &GaitTable, theta_rad: f64) -> Opti
 #[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
-    use crate::config::LEG_JOINT_NAMES;
-    use crate::slots::LEG_SLOTS;
+    use crate::control::double_support::GeometryParts;
     use crate::Setup;
 
     fn table_of(setup: &Setup) -> (OrbitTable, GaitTable, f64) {
         let model = &setup.model;
-        let legs = model.legs().unwrap();
         let q0 = setup.gait.initial_state.clone().unwrap().q;
-        let mut q_template = [0.0; MAX_DOF];
-        q_template[..model.dof()].copy_from_slice(&q0);
-        let mut leg_coord = [0; LEG_SLOTS];
-        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
-            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
-        }
-        let g = Geometry {
-            model,
-            legs: &legs,
-            dof: model.dof(),
-            q_template: &q_template,
-            leg_coord: &leg_coord,
-        };
-        let gait = GaitTable::new(&setup.gait, model, &legs).unwrap();
+        let parts = GeometryParts::new(model, &q0);
+        let (g, legs) = (parts.geometry(model), &parts.legs);
+        let gait = GaitTable::new(&setup.gait, model, legs).unwrap();
         let table = OrbitTable::of(&g, &gait).unwrap();
         // The planned post-impact state's σ about its stance foot.
         let s = setup.gait.initial_state.clone().unwrap();

@@ -4,16 +4,13 @@
 #![allow(clippy::unwrap_used)]
 
 use super::*;
-use crate::config::LEG_JOINT_NAMES;
+use crate::control::double_support::GeometryParts;
 use crate::Setup;
-use model::robot::Legs;
 use model::PlanarModel;
 
 struct Fixture {
     setup: Setup,
-    legs: Legs,
-    q_template: [f64; MAX_DOF],
-    leg_coord: [usize; 4],
+    parts: GeometryParts,
     table: GaitTable,
 }
 
@@ -21,7 +18,6 @@ impl Fixture {
     fn shipped() -> Self {
         let setup = Setup::shipped().unwrap();
         let model: &PlanarModel = &setup.model;
-        let legs = model.legs().unwrap();
         let nominal = model.nominal_pose().unwrap();
         let q = model
             .with_design(
@@ -30,30 +26,17 @@ impl Fixture {
                 setup.gait.design.shin_length_m,
             )
             .unwrap();
-        let mut q_template = [0.0; MAX_DOF];
-        q_template[..model.dof()].copy_from_slice(&q);
-        let mut leg_coord = [0; 4];
-        for (k, name) in LEG_JOINT_NAMES.iter().enumerate() {
-            leg_coord[k] = model.joints[model.require_joint(name).unwrap()].coordinate;
-        }
-        let table = GaitTable::new(&setup.gait, model, &legs).unwrap();
+        let parts = GeometryParts::new(model, &q);
+        let table = GaitTable::new(&setup.gait, model, &parts.legs).unwrap();
         Self {
             setup,
-            legs,
-            q_template,
-            leg_coord,
+            parts,
             table,
         }
     }
 
     fn geometry(&self) -> Geometry<'_> {
-        Geometry {
-            model: &self.setup.model,
-            legs: &self.legs,
-            dof: self.setup.model.dof(),
-            q_template: &self.q_template,
-            leg_coord: &self.leg_coord,
-        }
+        self.parts.geometry(&self.setup.model)
     }
 }
 
@@ -69,7 +52,7 @@ fn the_planned_post_impact_state_lies_on_the_orbit_s_momentum_profile() {
     let (theta, theta_rate) = f
         .setup
         .model
-        .stance_leg_angle_rate(&init.q, &init.dq, &f.legs, f.table.first_stance)
+        .stance_leg_angle_rate(&init.q, &init.dq, &f.parts.legs, f.table.first_stance)
         .unwrap();
     let span = f.table.theta_minus_rad - f.table.theta_plus_rad;
     let tau0 = (theta - f.table.theta_plus_rad) / span;
@@ -81,7 +64,7 @@ fn the_planned_post_impact_state_lies_on_the_orbit_s_momentum_profile() {
     q[..g.dof].copy_from_slice(&init.q);
     dq[..g.dof].copy_from_slice(&init.dq);
     // angular_momentum_about directly at the planned state (the planner pins the foot too).
-    let foot = f.legs.side(f.table.first_stance).foot;
+    let foot = f.parts.legs.side(f.table.first_stance).foot;
     let st = f.setup.model.body_poses(&init.q).unwrap();
     let p = f.setup.model.frame_position_in(&st, foot);
     let direct = f
@@ -142,11 +125,11 @@ fn the_lean_moves_the_centre_of_mass_but_not_the_swing_foot_nor_the_phase() {
             let a = f
                 .setup
                 .model
-                .frame_position_in(&st, f.legs.side(stance.other()).foot);
+                .frame_position_in(&st, f.parts.legs.side(stance.other()).foot);
             let b = f
                 .setup
                 .model
-                .frame_position_in(&st, f.legs.side(stance).foot);
+                .frame_position_in(&st, f.parts.legs.side(stance).foot);
             [a[0] - b[0], a[1] - b[1]]
         };
         let (fa, fb) = (feet(&base), feet(&lean));
