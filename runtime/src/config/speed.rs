@@ -14,10 +14,10 @@ use serde::{Deserialize, Serialize};
 /// ```text
 /// k_p   = position_gain_per_step / T̄_k  (T̄_k: the last stride's mean step duration;
 ///         position_gain_per_s if position_gain_per_step = 0)
-/// v_cmd = clamp(b + offset − k_p · p, library range)
+/// v_cmd = clamp(b + offset − k_p · p, c(library range))  (c: walked_mps, or the identity)
 /// e_k   = v_cmd,k−1 − v̄_k          (speed error of the last stride against its command)
 /// I    += integral_gain · e_k                           (|I| ≤ integral_limit_mps)
-/// σ     = clamp(v_cmd + speed_gain · e_k + I, library range,
+/// σ     = clamp(c⁻¹(v_cmd + speed_gain · e_k + I), library range,
 ///               σ_prev ± max_change_per_step_mps)          (the library gait of the next step)
 /// Δℓ    = clamp(g · (v_k − v_cmd), ± max_step_offset_m)   (the next step lands Δℓ longer:
 ///         g = step_length_gain_s after a fast step,        the step lever)
@@ -65,6 +65,24 @@ pub struct SpeedConfig {
     /// folder (absent: no library, speed control off).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub library: Option<String>,
+    /// The walked-speed calibration of the library (empty, the default: none, σ is the speed
+    /// the regulator asks for): the speed each library gait walks on the simulated robot, m/s,
+    /// one per library entry in its order, strictly increasing. The regulator then works in
+    /// walked speeds and takes the library speed σ that walks its target from this map
+    /// (piecewise linear, its inverse; `runtime::control::speed`, "The walked-speed
+    /// calibration").
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub walked_mps: Vec<f64>,
+    /// How far below the slowest library gait σ may go, m/s (0, the default: not at all): the
+    /// gait there extrapolates the two slowest linearly. Room for the regulator below a belt
+    /// that the slowest gait walks faster than.
+    #[serde(default)]
+    pub below_library_mps: f64,
+    /// The step lever measures a step against the requested speed rather than the command
+    /// when the request is below what the slowest gait walks (false, the default: against the
+    /// command): room below a belt slower than the library walks.
+    #[serde(default)]
+    pub lever_below_library: bool,
 }
 
 /// Where the robot's position along the belt comes from.
@@ -90,6 +108,9 @@ impl Default for SpeedConfig {
             slow_step_length_gain_s: default_step_length_gain_s(),
             position_source: PositionSource::Odometry,
             library: None,
+            walked_mps: Vec::new(),
+            below_library_mps: 0.0,
+            lever_below_library: false,
         }
     }
 }
@@ -125,6 +146,7 @@ impl SpeedConfig {
                 "speed.slow_step_length_gain_s",
                 self.slow_step_length_gain_s,
             ),
+            ("speed.below_library_mps", self.below_library_mps),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {
@@ -150,6 +172,31 @@ impl SpeedConfig {
                 });
             }
         }
+        if let Some(v) = self
+            .walked_mps
+            .iter()
+            .find(|v| !(v.is_finite() && **v > 0.0))
+        {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "speed.walked_mps".into(),
+                value: v.to_string(),
+                reason: "must be positive and finite".into(),
+            });
+        }
+        for (k, pair) in self.walked_mps.windows(2).enumerate() {
+            if pair[1] <= pair[0] {
+                return Err(RuntimeError::InvalidField {
+                    origin: origin.to_string(),
+                    field: format!("speed.walked_mps[{}]", k + 1),
+                    value: pair[1].to_string(),
+                    reason: format!(
+                        "must be above entry {k}'s {} m/s: the calibration must increase",
+                        pair[0]
+                    ),
+                });
+            }
+        }
         Ok(())
     }
 }
@@ -171,5 +218,26 @@ mod tests {
             assert!(e.contains(&bad.to_string()), "{e}");
         }
         assert!(SpeedConfig::default().validate("adam.toml").is_ok());
+    }
+
+    #[test]
+    fn a_calibration_that_does_not_increase_is_refused_naming_the_entry() {
+        let c = SpeedConfig {
+            walked_mps: vec![0.15, 0.2, 0.2],
+            ..SpeedConfig::default()
+        };
+        let e = c.validate("t.toml").expect_err("refused").to_string();
+        assert!(e.contains("speed.walked_mps[2]"), "{e}");
+        let c = SpeedConfig {
+            walked_mps: vec![f64::NAN],
+            ..SpeedConfig::default()
+        };
+        assert!(c.validate("t.toml").is_err());
+        let c = SpeedConfig {
+            walked_mps: vec![0.16, 0.2, 0.3],
+            below_library_mps: 0.01,
+            ..SpeedConfig::default()
+        };
+        assert!(c.validate("t.toml").is_ok());
     }
 }

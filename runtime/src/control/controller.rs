@@ -241,7 +241,7 @@ impl Controller {
             &model,
             &legs,
             &geometry,
-            stop_step_m,
+            (stop_step_m, &config.speed),
         )?;
         let layout = SlotLayout::new(config, with_held);
         let zero_ramp = Ramp {
@@ -742,9 +742,12 @@ impl Controller {
                 .on_impact(step_length_m, step_duration_s, (0.0, f64::INFINITY));
             return rate;
         };
-        let sigma = self
-            .regulator
-            .on_impact(step_length_m, step_duration_s, library.range_mps());
+        let sigma = self.regulator.on_impact_mapped(
+            step_length_m,
+            step_duration_s,
+            library.range_mps(),
+            library,
+        );
         let span_old = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
         let mut y_old = eval.y;
         // The step that ended landed its lever's offset from the gait's touchdown pose: relabeled

@@ -4,6 +4,27 @@
 use super::super::tick::{OperatorCommand, SpeedStatus};
 use crate::config::SpeedConfig;
 
+/// The library speed σ that walks a speed, and back: the walked-speed calibration
+/// (`speed.walked_mps`) or, without one, the identity.
+pub(in crate::control) trait SpeedMap {
+    /// The library speed σ whose gait walks `walked_mps`, m/s.
+    fn sigma_for(&self, walked_mps: f64) -> f64;
+    /// The speed the gait of library speed `sigma_mps` walks, m/s.
+    fn walked_at(&self, sigma_mps: f64) -> f64;
+}
+
+/// No calibration: σ is the walked speed.
+pub(in crate::control) struct Uncalibrated;
+
+impl SpeedMap for Uncalibrated {
+    fn sigma_for(&self, walked_mps: f64) -> f64 {
+        walked_mps
+    }
+    fn walked_at(&self, sigma_mps: f64) -> f64 {
+        sigma_mps
+    }
+}
+
 /// The regulator and the position loop: what the operator set and what the steps measured.
 #[derive(Clone, Copy, Debug)]
 pub(in crate::control) struct SpeedRegulator {
@@ -16,6 +37,7 @@ pub(in crate::control) struct SpeedRegulator {
     step_length_gain_s: f64,
     max_step_offset_m: f64,
     slow_step_length_gain_s: f64,
+    lever_below_library: bool,
     /// Belt travel since the last impact, m.
     belt_travel_m: f64,
     /// Time of the last [`SpeedRegulator::advance`], s.
@@ -42,6 +64,7 @@ impl SpeedRegulator {
             step_length_gain_s: config.step_length_gain_s,
             max_step_offset_m: config.max_step_offset_m,
             slow_step_length_gain_s: config.slow_step_length_gain_s,
+            lever_below_library: config.lever_below_library,
             belt_travel_m: 0.0,
             last_t_s: None,
             previous_step: None,
@@ -103,7 +126,22 @@ impl SpeedRegulator {
         duration_s: f64,
         range_mps: (f64, f64),
     ) -> f64 {
-        let (lo, hi) = range_mps;
+        self.on_impact_mapped(length_m, duration_s, range_mps, &Uncalibrated)
+    }
+
+    /// [`SpeedRegulator::on_impact`] with a walked-speed calibration: the command, the error,
+    /// the integral and the lever are in walked speeds (the command within what the library
+    /// walks, `map.walked_at` of `range_mps`), and the next step's σ is `map.sigma_for` of the
+    /// target, then clamped to `range_mps` and the step limit.
+    pub(in crate::control) fn on_impact_mapped(
+        &mut self,
+        length_m: f64,
+        duration_s: f64,
+        range_mps: (f64, f64),
+        map: &impl SpeedMap,
+    ) -> f64 {
+        let (sigma_lo, sigma_hi) = range_mps;
+        let (lo, hi) = (map.walked_at(sigma_lo), map.walked_at(sigma_hi));
         let s = &mut self.status;
         let measured = length_m.is_finite() && duration_s > 0.0;
         s.step_length_m = length_m;
@@ -139,18 +177,18 @@ impl SpeedRegulator {
         let integral = (s.integral_mps + self.integral_gain * error)
             .clamp(-self.integral_limit_mps, self.integral_limit_mps);
         // The library gait of the command, plus the step-to-step feedback.
-        let sigma = s.commanded_mps + self.speed_gain * error + integral;
+        let sigma = map.sigma_for(s.commanded_mps + self.speed_gain * error + integral);
         // Anti-windup: the integral only grows while σ is inside the library.
-        if (lo..=hi).contains(&sigma) || integral.abs() < s.integral_mps.abs() {
+        if (sigma_lo..=sigma_hi).contains(&sigma) || integral.abs() < s.integral_mps.abs() {
             s.integral_mps = integral;
         }
         let last = if s.library_mps.is_finite() {
-            s.library_mps.clamp(lo, hi)
+            s.library_mps.clamp(sigma_lo, sigma_hi)
         } else {
-            s.commanded_mps
+            map.sigma_for(s.commanded_mps)
         };
         let r = self.max_change_per_step_mps;
-        s.library_mps = sigma.clamp(lo, hi).clamp(last - r, last + r);
+        s.library_mps = sigma.clamp(sigma_lo, sigma_hi).clamp(last - r, last + r);
         // The step lever: a step faster than the command lands the next step longer (more
         // speed lost in its impact), a slower one shorter. The last step's speed, not the
         // stride's: averaged over two steps the lever came a step late and overshot (stalls).
@@ -158,7 +196,13 @@ impl SpeedRegulator {
         // shorter step after a slow one stalled more walks on the shipped library; module docs).
         let m = self.max_step_offset_m;
         s.step_offset_m = if measured && s.commanded_mps.is_finite() {
-            let fast = s.step_speed_mps - s.commanded_mps;
+            // Below the slowest gait the lever may measure against the request (room below).
+            let reference = if self.lever_below_library && s.requested_mps < lo {
+                s.requested_mps
+            } else {
+                s.commanded_mps
+            };
+            let fast = s.step_speed_mps - reference;
             let gain = if fast < 0.0 {
                 self.slow_step_length_gain_s
             } else {
@@ -331,6 +375,38 @@ mod tests {
         r.status.position_m = 0.0;
         r.on_impact(0.01, 2.0, (0.15, 0.35));
         assert_eq!(r.status.step_offset_m, -config.max_step_offset_m);
+    }
+
+    /// A calibration in which every gait walks 20 % faster than its library speed.
+    struct Fast;
+    impl SpeedMap for Fast {
+        fn sigma_for(&self, walked_mps: f64) -> f64 {
+            walked_mps / 1.2
+        }
+        fn walked_at(&self, sigma_mps: f64) -> f64 {
+            1.2 * sigma_mps
+        }
+    }
+
+    #[test]
+    fn with_a_calibration_the_regulator_asks_for_the_gait_that_walks_the_command() {
+        let config = SpeedConfig {
+            integral_gain: 0.0,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        r.status.library_mps = 0.21;
+        // At the centre, a step at the belt's speed: the command is the belt's 0.25 m/s and σ
+        // the gait that walks it, 0.25 / 1.2.
+        r.belt_travel_m = 0.2;
+        let sigma = r.on_impact_mapped(0.2, 0.8, (0.15, 0.35), &Fast);
+        assert_eq!(r.status.commanded_mps, 0.25);
+        assert!((sigma - 0.25 / 1.2).abs() < 1e-12, "σ = {sigma}");
+        // A belt faster than the fastest gait walks (0.42 m/s): the command stops there.
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.5 }));
+        r.on_impact_mapped(0.2, 0.8, (0.15, 0.35), &Fast);
+        assert!(r.status.clamped);
+        assert!((r.status.commanded_mps - 0.42).abs() < 1e-12);
     }
 
     #[test]
