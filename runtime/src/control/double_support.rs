@@ -93,6 +93,12 @@
 //! (11 steps in 11.9 s at seed 1, at least 12 required) and the controller unit tests on the
 //! braking pose, tuned for 0.24 m: its θ (0.144 rad) is not 0.05 rad past the re-plan's θ⁻, and
 //! no output of the lunge moves more than 0.023 rad (the test wants one past 0.05 rad).
+//! Re-measured with Stand's gravity torques (the re-plan and 0.20 m swapped into the shipped
+//! files, December 5): stop_sim passes, restart_sim's Walk → Stop → Stand → Walk passes (seeds
+//! 1–5, with and without the 0.25 m/s belt); stand_sim still trips on the step timeout at 6.82 s
+//! (Walk at 3.0 s; its Stand follows Ramp, which the gravity torques do not touch) and
+//! `walk_from_stand_on_a_moving_belt_walks` still takes 11 steps at seed 1. Those two and the
+//! braking-pose unit tests are what keeps the re-plan from being the default gait.
 //!
 //! # Why the walk from Stand drifts (measured; not a defect of the re-plan)
 //! The drift is the walk's return from the state the launch hands over, not the re-planned orbit:
