@@ -14,7 +14,8 @@
 //! Walk from Stand: ≤ 1 s launch in double support onto the orbit's σ*(θ), then the first step
 //!       blends into y^d(τ)
 //! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
-//!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles
+//!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles, the
+//!       landed pose's gravity torques fed forward
 //! Walk/Stop: no progress of τ for safety.stall_timeout_s ──▶ Damping (Trip::StepTimeout)
 //!   ▼
 //! TickOutput { commands[14] (PD or damping, motor side), status }
@@ -48,7 +49,9 @@
 //! (`double_support`: both feet down, the torso where the gait's first pose has it relative to
 //! the feet, lowered to keep the legs' reach). The longer landing loses more speed in the
 //! impact and leaves the capture point inside the feet; Stand then holds the landed joint
-//! angles and the robot rocks from foot to foot a few times and comes to rest
+//! angles, with the gravity torques of the landed double-support pose fed forward (both feet
+//! loaded: without them the graded-mesh re-plan of the gait rocked on, `double_support`), and
+//! the robot rocks from foot to foot a few times and comes to rest
 //! (`runtime/tests/stop_sim.rs`). Not longer: Walk again launches from that stance, and from a
 //! 0.30 m braking step (feet 0.34 m apart) the launch bent the stance knee until it saturated
 //! once the rear foot lifted (`runtime/tests/restart_sim.rs`).
@@ -132,6 +135,8 @@ pub struct Controller {
     /// Stand after a Stop holds these leg joint angles, model rad (`None`: Stand holds the
     /// gait's first pose, as after Ramp).
     stand_hold: Option<[f64; LEG_SLOTS]>,
+    /// ... with the gravity torques of the landed pose fed forward, N·m (model side).
+    stand_ff_nm: [f64; LEG_SLOTS],
     /// When the braking step of a Stop touched down (Stand starts [`STAND_DELAY_S`] later).
     stop_touchdown_t_s: Option<f64>,
     /// The braking step of a Stop: its touchdown pose and stance-leg angle.
@@ -296,6 +301,7 @@ impl Controller {
             phase_hat: None,
             ramp: zero_ramp,
             stand_hold: None,
+            stand_ff_nm: [0.0; LEG_SLOTS],
             stop_touchdown_t_s: None,
             lunge,
             braking: false,
@@ -672,6 +678,7 @@ impl Controller {
                         .is_some_and(|t0| t - t0 >= STAND_DELAY_S - 1e-9)
                 {
                     self.stand_hold = Some(leg_q);
+                    self.stand_ff_nm = self.stand_gravity_torques(&leg_q, &leg_dq);
                     self.enter(ControlState::Stand, status);
                 }
                 if self.state == ControlState::Stand {

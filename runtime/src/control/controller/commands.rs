@@ -39,13 +39,15 @@ impl Controller {
         }
     }
 
-    /// Stand: after a Stop, the joint angles of the braking step's landing; otherwise the
-    /// gait's first pose.
+    /// Stand: after a Stop, the joint angles of the braking step's landing with the gravity
+    /// torques of that pose fed forward ([`Self::stand_gravity_torques`]); otherwise the gait's
+    /// first pose.
     pub(super) fn stand_commands(&self, commands: &mut [JointCommand; SLOTS]) {
         match self.stand_hold {
             Some(leg_q) => {
                 for (k, &q) in leg_q.iter().enumerate() {
-                    commands[k] = self.pd(k, self.to_motor(k, q), 0.0, 0.0);
+                    let ff = self.layout.motor_torque_nm(k, self.stand_ff_nm[k]);
+                    commands[k] = self.pd(k, self.to_motor(k, q), 0.0, ff);
                 }
                 self.hold_commands(commands);
             }
@@ -56,6 +58,22 @@ impl Controller {
                 }
             }
         }
+    }
+
+    /// The leg torques that hold the measured double-support pose against gravity with the
+    /// smallest contact forces (both feet loaded; `Geometry::gravity_torques`), N·m model side;
+    /// zero if the kinematics fail. Called once, when Stand after a Stop begins.
+    pub(super) fn stand_gravity_torques(
+        &self,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+    ) -> [f64; LEG_SLOTS] {
+        let g = self.geometry();
+        let pitch = self.estimator.pitch_rad();
+        let rate = self.estimator.pitch_rate_rad_s();
+        g.measure(self.stance, pitch, rate, leg_q, leg_dq)
+            .and_then(|m| g.gravity_torques(self.stance, m.pose, leg_q))
+            .unwrap_or([0.0; LEG_SLOTS])
     }
 
     /// The kinematics of double support on this robot.
