@@ -19,6 +19,14 @@
 //! accelerations), so the gyro carries the pitch within a step and each touchdown corrects
 //! pitch and, through the cross covariance, the bias.
 //!
+//! Standing on a treadmill (Stand after Ramp, with a belt speed given by the operator) the
+//! controller makes the same kinematic measurement every tick: both feet are on the belt. A belt
+//! that ramps under the standing robot (0.5 m/s²) tilts the accelerometer's gravity by 0.05 rad,
+//! which the filter took for a tilt (0.020 rad off at Walk, 0.033 rad by the end of the first
+//! step, the gyro bias dragged along); the legs' pitch is not biased by it (< 1 mrad off,
+//! `runtime::sim::scenarios`). Not without a treadmill: there it changed a marginal launch
+//! (`runtime/tests/restart_sim.rs`, one gait, seed 1: 10 steps in 11.9 s, 12 required).
+//!
 //! Allocation-free, `Copy`; time is an argument (`dt_s`).
 
 /// Standard gravity, m/s².

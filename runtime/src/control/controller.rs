@@ -500,6 +500,16 @@ impl Controller {
             );
             self.last_imu_t_s = Some(imu.t_s);
         }
+        // Standing after Ramp on a treadmill (the operator gave its belt speed) both feet are on
+        // the belt: the legs measure the pitch (the one that levels the feet, as at a
+        // touchdown), which the belt's acceleration does not bias as it tilts the
+        // accelerometer's gravity (`runtime::estimator`).
+        if self.state == ControlState::Stand && self.stand_hold.is_none() && self.regulator.active()
+        {
+            let pitch = self.touchdown_pitch_rad(&leg_q);
+            self.estimator
+                .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+        }
         // Operator, then safety (a trip overrides any request).
         if let Some(cmd) = input.operator {
             if !self.regulator.operator(cmd) {
