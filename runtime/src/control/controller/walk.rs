@@ -4,7 +4,6 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
-use crate::control::double_support::Geometry;
 use crate::control::orbit::{pinned, LEAN};
 use crate::control::speed::LEVER_BLEND_FROM;
 use crate::control::tick::ControlState;
@@ -189,22 +188,8 @@ impl Controller {
             && !self.braking
             && (!switching || self.orbit.with_speed_control);
         let sigma = if on {
-            let mut q = self.q_template;
-            let mut dq = [0.0; MAX_DOF];
-            q[2] = self.estimator.pitch_rad();
-            dq[2] = self.estimator.pitch_rate_rad_s();
-            for k in 0..LEG_SLOTS {
-                q[self.leg_coord[k]] = leg_q[k];
-                dq[self.leg_coord[k]] = leg_dq[k];
-            }
-            let geometry = Geometry {
-                model: &self.model,
-                legs: &self.legs,
-                dof: self.dof,
-                q_template: &self.q_template,
-                leg_coord: &self.leg_coord,
-            };
-            pinned(&geometry, &q, &dq, self.stance).map_or(f64::NAN, |p| p.sigma)
+            let (q, dq) = self.measured_state(leg_q, leg_dq);
+            pinned(&self.geometry(), &q, &dq, self.stance).map_or(f64::NAN, |p| p.sigma)
         } else {
             f64::NAN
         };
@@ -217,14 +202,13 @@ impl Controller {
         }
     }
 
-    /// Phase, desired outputs and the touchdown condition for the current stance leg.
-    pub(super) fn walk_references(
+    /// The model's coordinates and rates as measured: the estimated torso pitch and its rate,
+    /// the legs' joints, the rest from the template (allocation-free: arrays by value).
+    fn measured_state(
         &self,
-        t_s: f64,
         leg_q: &[f64; LEG_SLOTS],
         leg_dq: &[f64; LEG_SLOTS],
-    ) -> WalkEval {
-        let dof = self.dof;
+    ) -> ([f64; MAX_DOF], [f64; MAX_DOF]) {
         let mut q = self.q_template;
         let mut dq = [0.0; MAX_DOF];
         q[2] = self.estimator.pitch_rad();
@@ -233,6 +217,18 @@ impl Controller {
             q[self.leg_coord[k]] = leg_q[k];
             dq[self.leg_coord[k]] = leg_dq[k];
         }
+        (q, dq)
+    }
+
+    /// Phase, desired outputs and the touchdown condition for the current stance leg.
+    pub(super) fn walk_references(
+        &self,
+        t_s: f64,
+        leg_q: &[f64; LEG_SLOTS],
+        leg_dq: &[f64; LEG_SLOTS],
+    ) -> WalkEval {
+        let dof = self.dof;
+        let (q, dq) = self.measured_state(leg_q, leg_dq);
         let swing = self.stance.other();
         // Sizes are fixed at construction, so these calls cannot fail; NaN marks "unknown".
         let foot_height_m = self
