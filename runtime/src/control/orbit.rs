@@ -13,10 +13,11 @@
 //! σ*(τ)²     = σ*(0)² + 2·M·g·∫₀^τ κ(s)·(x_c(s) − x_f) ds
 //! ```
 //! σ*(0) is the momentum of the gait's planned post-impact state (`initial_state`). The table
-//! is computed once at load ([`OrbitTable::of`]) on [`ORBIT_SAMPLES`] phases: the pose at τ is
-//! the joints at y^d(τ) with the torso pitch that puts the stance leg at θ(τ) (Newton), ∂q/∂τ by
-//! the Bézier derivative (joints) and a central difference (pitch), the foot pinned (the base
-//! moves so that the stance foot does not). Each library gait gets its table; at an impact the
+//! is computed once at load ([`OrbitTable::of`]) on [`ORBIT_SAMPLES`] phases, with the launch
+//! table's manifold point (`orbit_table`: the momentum per unit θ̇ on the outputs' manifold,
+//! exact, the stance foot pinned) times dθ/dτ, so the launch and the lever share one σ*(θ)
+//! integrand; the two tables differ only in where σ* starts (here the planned post-impact
+//! state, there the σ⁺ that gives the planned duration). Each library gait gets its table; at an impact the
 //! table of the speed the next step walks is the two neighbours' blend, as the gait's own tables
 //! ([`OrbitLever::select`]). The planned duration ∫₀¹ κ/σ* dτ equals the gait's step duration
 //! to the plan's accuracy (a unit test).
@@ -121,23 +122,14 @@ pub(super) struct OrbitTable {
     pub(super) kappa: [f64; ORBIT_SAMPLES],
 }
 
-/// The pinned-foot momentum and the centre of mass relative to the foot.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Pinned {
-    /// Angular momentum about the stance foot, kg·m²/s.
-    pub(super) sigma: f64,
-    /// Centre of mass ahead of the stance foot, m.
-    pub(super) com_ahead_m: f64,
-}
-
-/// σ about the stance foot of `stance` for pose `q` and rates `dq` (the base's rates are
-/// replaced by those that keep the foot still), and x_c − x_f. `None` if the kinematics fails.
+/// σ about the stance foot of `stance` for pose `q` and rates `dq`, kg·m²/s (the base's
+/// rates are replaced by those that keep the foot still). `None` if the kinematics fails.
 pub(super) fn pinned(
     g: &Geometry,
     q: &[f64; MAX_DOF],
     dq: &[f64; MAX_DOF],
     stance: Side,
-) -> Option<Pinned> {
+) -> Option<f64> {
     let dof = g.dof;
     let mut v = *dq;
     v[0] = 0.0;
@@ -148,15 +140,7 @@ pub(super) fn pinned(
     let vf = g.model.frame_velocity_in(&st, foot);
     v[0] = -vf[0];
     v[1] = -vf[1];
-    let sigma = g
-        .model
-        .angular_momentum_about(&q[..dof], &v[..dof], p)
-        .ok()?;
-    let com = g.model.center_of_mass(&q[..dof]).ok()?;
-    Some(Pinned {
-        sigma,
-        com_ahead_m: com[0] - p[0],
-    })
+    g.model.angular_momentum_about(&q[..dof], &v[..dof], p).ok()
 }
 
 /// The pose on the gait's outputs at phase `tau` for `stance`, the hips offset by `lean_rad`
@@ -223,14 +207,13 @@ impl OrbitTable {
         q0[..g.dof].copy_from_slice(&init.q);
         dq0[..g.dof].copy_from_slice(&init.dq);
         let sigma0 = pinned(g, &q0, &dq0, stance)
-            .ok_or_else(|| bad("the initial state's kinematics failed".into()))?
-            .sigma;
+            .ok_or_else(|| bad("the initial state's kinematics failed".into()))?;
         let mass_g = g.model.total_mass_kg() * g.model.gravity_mps2;
         let mut kappa = [0.0; ORBIT_SAMPLES];
         let mut com = [0.0; ORBIT_SAMPLES];
         for k in 0..ORBIT_SAMPLES {
             let tau = k as f64 / (ORBIT_SAMPLES - 1) as f64;
-            let (kp, x) = manifold_point(g, table, stance, tau)
+            let (kp, x) = manifold_point(g, table, tau)
                 .ok_or_else(|| bad(format!("no pose on the outputs at τ = {tau:.3}")))?;
             kappa[k] = kp;
             com[k] = x;
@@ -279,21 +262,13 @@ impl OrbitTable {
     }
 }
 
-/// κ(τ) = ∂σ/∂τ̇ and x_c − x_f at phase `tau` on the outputs' manifold.
-fn manifold_point(g: &Geometry, table: &GaitTable, stance: Side, tau: f64) -> Option<(f64, f64)> {
-    let q = pose_at(g, table, stance, tau, 0.0)?;
-    let h = 1e-5;
-    let (a, b) = ((tau - h).max(0.0), (tau + h).min(1.0));
-    let pitch_rate =
-        (pose_at(g, table, stance, b, 0.0)?[2] - pose_at(g, table, stance, a, 0.0)?[2]) / (b - a);
-    let mut dq = [0.0; MAX_DOF];
-    dq[2] = pitch_rate;
-    let s = side_index(stance);
-    for i in 0..OUTPUTS {
-        dq[g.leg_coord[table.out_slot[s][i]]] = table.eval(i, tau).1;
-    }
-    let p = pinned(g, &q, &dq, stance)?;
-    Some((p.sigma, p.com_ahead_m))
+/// κ(τ) = ∂σ/∂τ̇ and x_c − x_f at phase `tau` on the outputs' manifold (of `table`'s first
+/// stance leg): the launch table's exact I(θ) (`orbit_table`) times dθ/dτ = θ⁻ − θ⁺.
+fn manifold_point(g: &Geometry, table: &GaitTable, tau: f64) -> Option<(f64, f64)> {
+    let span = table.theta_minus_rad - table.theta_plus_rad;
+    let (inertia, com_ahead_m) =
+        super::orbit_table::manifold_point(g, table, table.theta_plus_rad + tau * span)?;
+    Some((inertia * span, com_ahead_m))
 }
 
 /// The orbit lever's state and gains: the active σ* table (a library's blended at impacts), the

@@ -124,7 +124,11 @@ impl OrbitTable {
 
 /// On the gait's manifold at stance-leg angle `theta_rad`: I(θ) (angular momentum about the
 /// stance foot per unit θ̇, kg·m²) and the centre of mass ahead of the stance foot, m.
-fn manifold_point(geometry: &Geometry, gait: &GaitTable, theta_rad: f64) -> Option<(f64, f64)> {
+pub(super) fn manifold_point(
+    geometry: &Geometry,
+    gait: &GaitTable,
+    theta_rad: f64,
+) -> Option<(f64, f64)> {
     let model = geometry.model;
     let stance = gait.first_stance;
     let span = gait.theta_minus_rad - gait.theta_plus_rad;

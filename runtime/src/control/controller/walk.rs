@@ -189,7 +189,7 @@ impl Controller {
             && (!switching || self.orbit.with_speed_control);
         let sigma = if on {
             let (q, dq) = self.measured_state(leg_q, leg_dq);
-            pinned(&self.geometry(), &q, &dq, self.stance).map_or(f64::NAN, |p| p.sigma)
+            pinned(&self.geometry(), &q, &dq, self.stance).unwrap_or(f64::NAN)
         } else {
             f64::NAN
         };
