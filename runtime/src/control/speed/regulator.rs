@@ -345,6 +345,17 @@ mod tests {
         assert_eq!(r.status.step_offset_m, 0.0);
     }
 
+    /// A regulator at the centre of a 0.25 m/s belt after a first step and then a 0.16 m step
+    /// in 0.8 s (0.2 m/s, slow), the belt's travel matched so the position stays put.
+    fn after_a_slow_step(config: &SpeedConfig) -> SpeedRegulator {
+        let mut r = regulator(config);
+        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
+        r.status.position_m = 0.0;
+        r.belt_travel_m = 0.16;
+        r.on_impact(0.16, 0.8, (0.15, 0.35));
+        r
+    }
+
     #[test]
     fn after_a_slow_step_the_lever_takes_its_slow_side_gain() {
         // None: no shorter step after a slow one.
@@ -352,11 +363,7 @@ mod tests {
             slow_step_length_gain_s: 0.0,
             ..SpeedConfig::default()
         };
-        let mut r = regulator(&config);
-        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
-        r.status.position_m = 0.0;
-        r.belt_travel_m = 0.16;
-        r.on_impact(0.16, 0.8, (0.15, 0.35));
+        let r = after_a_slow_step(&config);
         assert_eq!(r.status.commanded_mps, 0.25);
         assert_eq!(r.status.step_offset_m, 0.0);
         // With a slow-side gain: shorter by it, at most the limit.
@@ -364,11 +371,7 @@ mod tests {
             slow_step_length_gain_s: 0.5,
             ..SpeedConfig::default()
         };
-        let mut r = regulator(&config);
-        r.on_impact(f64::NAN, 0.0, (0.15, 0.35));
-        r.status.position_m = 0.0;
-        r.belt_travel_m = 0.16;
-        r.on_impact(0.16, 0.8, (0.15, 0.35));
+        let mut r = after_a_slow_step(&config);
         let expected = 0.5 * (0.2 - 0.25);
         assert!(expected < 0.0);
         assert!((r.status.step_offset_m - expected).abs() < 1e-12);
