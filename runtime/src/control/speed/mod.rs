@@ -77,8 +77,8 @@
 //! takes up only what the calibration misses, not the whole bias (0.06 m/s at 0.25 m/s), which
 //! it used to build over tens of steps while the position swung.
 //!
-//! **Identification** (`cargo run --release -p runtime --example treadmill_probe -- ident
-//! CONFIG v 0.025 SEED`: speed control with every gain at 0, so σ is the belt speed v, on an
+//! **Identification** (`cargo run --release -p runtime --example treadmill_probe -- CONFIG v
+//! 0.025 SEED`: speed control with every gain at 0, so σ is the belt speed v, on an
 //! endless belt at v; the operator's offset steps σ by +0.025 m/s at 30 s; seeds 1–3). The
 //! mean walked speed over 20–30 s at σ = 0.15, 0.175, …, 0.375 m/s: 0.154 (seed 1 stalled at
 //! 0.15 m/s), 0.184, 0.225, 0.284, 0.311, 0.332, 0.350, 0.390, 0.405, 0.416; at 0.40 m/s
@@ -99,9 +99,10 @@
 //! brings the pair to 0.72–0.75 but stalls the slow gaits (below). Hence the calibration: it
 //! shrinks the integral's work, and g_p could rise (0.25–0.4 keep |z| ≈ √a in the model).
 //!
-//! **On the simulator** (`treadmill_probe -- accept CONFIG SEEDS`: the bench's tables (a) and
-//! (b); with the calibration, the shipped gains unless said; max |position| after 10 s at
-//! 0.15 / 0.20 / 0.25 / 0.30 / 0.35 m/s, then the belt step):
+//! **On the simulator** (the constant-belt and belt-step runs of `adam bench treadmill
+//! --config CONFIG --seeds …`, its tables (a) and (b); with the calibration, the shipped gains
+//! unless said; max |position| after 10 s at 0.15 / 0.20 / 0.25 / 0.30 / 0.35 m/s, then the
+//! belt step):
 //! - **kept**, the shipped gains (g_p = 0.17, k_i = 0.1), seeds 1–10: no stall in 60 runs;
 //!   0.376 / 0.187 / 0.310 / 0.143 / 0.107 m (without the calibration, seeds 1–10: 0.346 /
 //!   0.191 / 0.325 / 0.158 / 0.112 m); the belt step matches within 8 steps both ways in 8 of
