@@ -83,6 +83,12 @@
 //!   belt step 2/5, −20 N unchanged (0/5 at 10/30/90 %); k = 0.3: 0.25 m/s 5/5 off the front of
 //!   the belt. The library gaits walk 15–20 % faster than planned (`runtime::control::speed`),
 //!   so the lever pulls against the regulator's integral, which was tuned to that bias.
+//! - Each library gait alone (no speed control, `cargo run --release -p runtime --example
+//!   impact_probe -- CONFIG GAIT v 60 1` with `enabled = true`, mean over 30–60 s, seed 1):
+//!   the lever makes every gait faster, not slower: the 0.225 m/s gait walks 133 % of its plan
+//!   at k = 0.1 and 143 % at k = 0.3 (125.6 % without the lever), 0.30 m/s 117.8 / 121.8 %
+//!   (115.3 %). Why the gaits walk fast at all: `runtime::control::speed`, "Where the extra
+//!   energy comes from".
 //! - Why the gain stays small: k = 0.4–0.8 on the shipped gait falls within 3–13 s (steps
 //!   shortening to 0.01–0.1 m). Two mechanisms seen in the logs: the lean is an internal motion,
 //!   so it does not change σ about the stance foot, but it moves the centre of mass and so the

@@ -192,14 +192,69 @@
 //!   the 0.30 m/s gait, but the 0.20 m/s gait then walks 0.17–0.19 and the 0.225 m/s gait
 //!   0.19–0.22 m/s.
 //!
-//! So the walked orbit differs from the planned one in its timing, and the lever that moves
-//! it most is the tracking lag of the swing (the PD and the bus latency, which the lead
-//! compensates): the planner's rigid model tracks its outputs exactly, the simulated A1s lag
-//! them by milliseconds, and the lag shortens the steps' duration more the faster the gait.
-//! No single lead fits the library (2 ms is right at 0.25 m/s and 8–9 % slow at
+//! So the walked orbit differs from the planned one in its timing, and the tracking moves it
+//! most; no single lead fits the library (2 ms is right at 0.25 m/s and 8–9 % slow at
 //! 0.20–0.225 m/s); the lead stays at 0.5 ms (the default gait's, and the replay fixtures'),
-//! and the integral takes up the bias. Not a defect of the simulator found: step lengths are
-//! as planned.
+//! and the integral takes up the bias.
+//!
+//! # Where the extra energy comes from (measured 2026-12-05, from the simulator's truth)
+//! `cargo run --release -p runtime --example impact_probe -- configs/runtime/adam.toml GAIT v 60 1`
+//! (each library gait alone, from its planned post-impact state, endless belt at its speed,
+//! seed 1; "walked" below is the mean over 30–60 s of its touchdown table: Σ length / Σ duration). Per step it measures
+//! the angular momentum about the stance foot σ around each impact and along the step.
+//! - **Not the impact.** The sim's touchdown is one foot's plastic impact, as the planner's:
+//!   the old stance foot is released at the impact (no double support), σ about the new foot
+//!   is conserved through it to 0.3 %, and the ratio σ⁺ (new foot) / σ⁻ (old foot) is the
+//!   plan's in every step (0.225 m/s gait: 0.9460 in its first step, 0.9464 mean after 20 s;
+//!   0.35 m/s: 0.9190, 0.9184), 22.5–22.9 % of the kinetic energy lost. The step ends at the
+//!   planned stance-leg angle within 1 mrad and the planned step length within 1–3 mm; the
+//!   controller detects the touchdown 1.5 ms after it (mean), within the step's last 1 % of
+//!   phase, which the references clamp: the detection is not it either.
+//! - **Single support gains more than planned.** Only gravity changes σ in single support, so
+//!   a step's gravity work is W = σ⁻² − σ⁺², and the periodic orbit needs W = σ⁺²(1 − c²)/c²
+//!   (c the impact's ratio above): 2.397 at 0.225 m/s, 6.609 at 0.35 m/s. Walked, after 20 s:
+//!   2.893 (+21 %) and 7.947 (+20 %); the first steps, from the planned state, 2.25 and 9.02.
+//!   The fixed point σ⁺² = c²·W/(1 − c²) follows W, and the step's duration follows the
+//!   mid-step momentum, σ_mid² = σ⁺² − D, a small difference on the slow gaits (0.225 m/s:
+//!   σ⁺² = 20.4, σ_mid² = 4.7): +15 % in σ⁺² is +60 % in σ_mid². That is why the slow gaits
+//!   are the sensitive ones, and why the contraction per step is slow (|λ| ≈ 0.9).
+//! - **Where in the step.** The centre of mass of the measured pose against the planned pose at
+//!   the same stance-leg angle explains 0.01–0.1 of W (0.225 m/s gait); most of the excess is
+//!   the outputs' rates off the manifold, the stance hip's (the torso's) the largest (+0.1 …
+//!   +0.7 per step), concentrated after the impact, where the old swing leg lands lagging its
+//!   references (swing hip −7 … −8 mrad and −0.3 rad/s at τ = 1 at 0.27 m/s, against −1 … +4
+//!   mrad in the first steps) and the PD pulls the new stance leg back onto y^d in the first
+//!   10–20 % of the step while the centre of mass is behind the foot; at 0.35 m/s the stance
+//!   hip's error swings −9 → +8 mrad over the step once the gait walks 115 % (±2 mrad in its
+//!   first step). The errors grow with the walked speed (the feed-forward is the plan's at
+//!   the planned phase rate, the reference lag is a time): a positive feedback.
+//! - **What sets the walked speed**: walked/planned (config copies of `adam.toml`, seed 1) at
+//!   0.20 / 0.225 / 0.30 / 0.35 / 0.40 m/s:
+//!   default (PD 150/3, lead 0.5 ms): 102.5 / 125.6 / 115.3 / 115.2 / 106.9 %;
+//!   lead 2.5 ms: 88.9 / 88.1 / 104.8 / 112.2 / 104.2 %;
+//!   PD 300/6 and lead 2.5 ms: 88.6 / 96.6 / 99.8 / 100.3 / 103.4 % (the slow gaits bounce:
+//!   a second touchdown 5 ms after most impacts);
+//!   PD 300/6, lead 0.5 ms: 122.9 / 117.2 / 111.3 / 134.8 / 129.3 %.
+//!   The simulated loop acts 2–3 ms after its sample (`drivers::sim::bus`: the replies are
+//!   sampled at the start of an exchange, the command computed from them goes out with the
+//!   next exchange and acts in the period after it), of which the lead compensates 0.5 ms: with
+//!   the delay compensated and the stiffer PD, the fast gaits walk their plan within 0–3.4 %.
+//!   A torso lean (both hips offset by the same angle, the feet unmoved, no fade: a temporary
+//!   hook, not kept) of +5 / −5 mrad moves the 0.225 m/s gait to 86 / 136 %, the 0.20 m/s
+//!   to 87 / 143 % (0.175 m/s stalls at +5 mrad), but the 0.35 m/s gait only to 114 / 117 %:
+//!   ±3 % per mrad on the slow gaits, ±0.3 % on the fast ones. The pitch estimate is biased
+//!   by +2.4 mrad at 0.225 m/s and +0.8 at 0.35 (mean over 30 s, against the truth at the
+//!   sample's time, the same temporary hook; `adam run --backend sim` reports RMS 0.139°), as
+//!   a lean of the same size; with the true pitch in the controller (the hook) the slow gaits
+//!   walk faster still (0.20: 138 %, 0.225: 132 %, 0.15: 185 %).
+//! - So: no defect of the simulator found, and no single cause. The planned orbits of the
+//!   slow gaits hold their speed by a small margin of momentum at mid-step, so their walked
+//!   speed is as sensitive as ±3 % per mrad of torso lean to anything that moves the torso or
+//!   the post-impact state off the plan (the 2–3 ms loop delay, the PD's stiffness, the pitch
+//!   estimate's bias); the fast gaits follow the tracking (delay and stiffness). A fix needs
+//!   feedback on the walked orbit as well as the delay compensated: the orbit lever (within
+//!   the step, `runtime::control::orbit`) makes every gait faster, not slower (0.225 m/s gait
+//!   alone: 133 % at k = 0.1, 143 % at k = 0.3, with `[orbit] enabled`).
 //!
 //! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
 //! With the walked-speed calibration: 0.15–0.35 m/s: no fall, no trip (none in seeds 6–10
