@@ -255,6 +255,14 @@
 //!   feedback on the walked orbit as well as the delay compensated: the orbit lever (within
 //!   the step, `runtime::control::orbit`) makes every gait faster, not slower (0.225 m/s gait
 //!   alone: 133 % at k = 0.1, 143 % at k = 0.3, with `[orbit] enabled`).
+//! - Tried and not kept, the delay compensated in the treadmill config (the identification
+//!   above, `treadmill_probe`, gains 0, mean over 20–30 s, seeds 1–3): `reference_lead_s` =
+//!   2.5 ms: the 0.15 m/s gait stalls in 3 of 3 (0.175 m/s in 1), 0.20 / 0.225 / 0.25 walk
+//!   0.18 / 0.21 / 0.23–0.25 m/s, 0.30–0.375 still 0.32 / 0.38 / 0.39 / 0.40–0.41; 1.5 ms: the
+//!   0.15 m/s gait stalls in 2 of 3, 0.175–0.225 within −7 … +2 %, 0.25 m/s and faster 9–19 %
+//!   fast. Each gait alone at 1.5 ms (`impact_probe`, 30–60 s): 0.225 m/s walks 95.4 % with
+//!   seed 1, 108.0 % with seed 2. Not kept: no lead both keeps the slowest gait walking and
+//!   brings the library near its plan, and the seeds scatter by ±6 %.
 //!
 //! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
 //! With the walked-speed calibration: 0.15–0.35 m/s: no fall, no trip (none in seeds 6–10
