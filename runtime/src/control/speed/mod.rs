@@ -263,6 +263,26 @@
 //!   fast. Each gait alone at 1.5 ms (`impact_probe`, 30–60 s): 0.225 m/s walks 95.4 % with
 //!   seed 1, 108.0 % with seed 2. Not kept: no lead both keeps the slowest gait walking and
 //!   brings the library near its plan, and the seeds scatter by ±6 %.
+//! - **Feedback on the step's timing works for a gait alone** (a prototype, not kept): at each
+//!   impact in Walk, r = T_gait/T_k − 1 (the gait's planned step duration over the step's)
+//!   feeds an integral b_I += k_i·r, and both hips are offset by clamp(b_I + k_p·r, ±0.05 rad)
+//!   (the torso leans back when fast; no fade: the offset is the same on both legs, so the
+//!   references stay continuous across the relabeling). Each gait alone (`impact_probe`, 60 s,
+//!   seed 1, walked/planned over 30–60 s, 0.15 … 0.40 m/s), k_i = 0.01, k_p = 0.02: 98.9 /
+//!   100.1 / 100.2 / 100.5 / 100.5 / 99.4 / 100.1 / 96.5 / 93.9 / 96.5 / 97.9 % (without: 96.3 /
+//!   101.2 / 102.5 / 125.6 / 123.5 / 119.2 / 115.3 / 119.9 / 115.2 / 110.6 / 106.9 %); k_i =
+//!   0.005, k_p = 0: within −5.5 … +1.2 %. The fast gaits, where the lean moves the speed
+//!   least, are the slowest to settle. With speed control it made the treadmill worse
+//!   (`treadmill_probe CONFIG v 0 SEED`, a constant belt on an endless belt, seeds 1–5, after
+//!   10 s, 0.15 / 0.20 / 0.25 / 0.30 / 0.35 m/s): without it max |position| 0.360 / 0.165 /
+//!   0.292 / 0.121 / 0.097 m, walked/belt 104.9 / 101.9 / 100.9 / 100.7 / 100.6 %; with it
+//!   (0.01, 0.02) and `walked_mps` removed (the gaits now walk their plan) 3 of 5 stall at
+//!   0.15 m/s and 0.47 / 0.50 / 0.86 / 0.30 m at 0.20–0.35 m/s, walked/belt 85–101 %; with
+//!   the calibration kept 1 of 5 stalls, 0.28 / 0.51 / 0.64 / 0.41 m; (0.005, 0) without it
+//!   0.15 m/s walks 56 % of the belt, 0.53 / 0.63 / 0.77 / 0.30 m. The trim's slow integral
+//!   and the regulator's (k_i = 0.1 per step, tuned to the creeping library) fight: a trim for
+//!   speed control needs the regulator re-tuned with it (not done), or the trim only where the
+//!   regulator is off.
 //!
 //! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
 //! With the walked-speed calibration: 0.15–0.35 m/s: no fall, no trip (none in seeds 6–10
