@@ -281,8 +281,11 @@
 //!   the calibration kept 1 of 5 stalls, 0.28 / 0.51 / 0.64 / 0.41 m; (0.005, 0) without it
 //!   0.15 m/s walks 56 % of the belt, 0.53 / 0.63 / 0.77 / 0.30 m. The trim's slow integral
 //!   and the regulator's (k_i = 0.1 per step, tuned to the creeping library) fight: a trim for
-//!   speed control needs the regulator re-tuned with it (not done), or the trim only where the
-//!   regulator is off.
+//!   speed control needs the regulator re-tuned with it, or the trim only where the regulator
+//!   is off. One retune tried: the trim (0.01, 0.02), no calibration and the regulator's
+//!   integral off: 0.25 / 0.30 / 0.35 m/s hold 0.128 / 0.160 / 0.189 m (walked/belt 100.5 /
+//!   100.5 / 99.9 %), but 2 of 5 stall at 0.15 m/s and one run at 0.20 m/s walks 71 % of the
+//!   belt: not kept.
 //!
 //! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
 //! With the walked-speed calibration: 0.15–0.35 m/s: no fall, no trip (none in seeds 6–10
