@@ -200,13 +200,14 @@
 //! # Where the extra energy comes from (measured 2026-12-05, from the simulator's truth)
 //! `cargo run --release -p runtime --example impact_probe -- configs/runtime/adam.toml GAIT v 60 1`
 //! (each library gait alone, from its planned post-impact state, endless belt at its speed,
-//! seed 1; "walked" below is the mean over 30–60 s of its touchdown table: Σ length / Σ duration). Per step it measures
-//! the angular momentum about the stance foot σ around each impact and along the step.
+//! seed 1; "walked" below is the mean over 30–60 s of its touchdown table: Σ length / Σ
+//! duration). Per step it measures the angular momentum about the stance foot σ around each
+//! impact and along the step.
 //! - **Not the impact.** The sim's touchdown is one foot's plastic impact, as the planner's:
 //!   the old stance foot is released at the impact (no double support), σ about the new foot
 //!   is conserved through it to 0.3 %, and the ratio σ⁺ (new foot) / σ⁻ (old foot) is the
 //!   plan's in every step (0.225 m/s gait: 0.9460 in its first step, 0.9464 mean after 20 s;
-//!   0.35 m/s: 0.9190, 0.9184), 22.5–22.9 % of the kinetic energy lost. The step ends at the
+//!   0.35 m/s: 0.9190, 0.9184), 22–23.5 % of the kinetic energy lost (mean 22.5 and 22.9 %). The step ends at the
 //!   planned stance-leg angle within 1 mrad and the planned step length within 1–3 mm; the
 //!   controller detects the touchdown 1.5 ms after it (mean), within the step's last 1 % of
 //!   phase, which the references clamp: the detection is not it either.
