@@ -5,26 +5,15 @@
 //! A library entry's stored check (what `adam plan library` measured) must agree with the
 //! re-verification too.
 //!
-//! One file is a known exception, listed in [`KNOWN_OFF`] with its measured figure: the test
-//! asserts it is *still* off, so re-planning it (configs/gaits/README.md gives the command)
-//! fails here until the exception is removed.
+//! No file is an exception: the runtime's default gait (`adam_codesign.json`) was the last, an
+//! old uniform-mesh plan whose orbit stepped 3.55 % slower than planned, until it was re-planned
+//! on the graded mesh (configs/gaits/README.md).
 
 use model::gait::GaitFile;
 use model::library::GaitLibrary;
 use model::PlanarModel;
 use planner::verify::{verify_gait, VerifyOptions, VerifyReport, PLAN_ACCURACY};
 use std::path::{Path, PathBuf};
-
-/// Gait files whose orbit is known to miss the plan by more than [`PLAN_ACCURACY`], with why.
-/// `adam_codesign.json`, the runtime's default gait, is the uniform-mesh plan of an earlier
-/// `adam codesign`: its orbit steps in 0.9319 s against 0.8999 s planned (+3.55 %). Re-planned
-/// on the graded mesh it steps 0.1687 m in 0.9025 s (+0.28 %), and the runtime restarts it after
-/// a Stop with a 0.20 m braking step, but its walk from Stand still drifts to a stall
-/// (`runtime::control::double_support`, "The restart of a re-planned gait").
-const KNOWN_OFF: [(&str, &str); 1] = [(
-    "adam_codesign.json",
-    "the old uniform-mesh plan (+3.55 % step duration); the runtime's launch is tuned on it",
-)];
 
 fn gaits_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/gaits")
@@ -87,27 +76,18 @@ fn every_shipped_gait_steps_within_plan_accuracy_of_its_plan() {
             let report = verify(&name, &model, &gait);
             let (d, l) = report.plan_mismatch();
             table.push(row(&name, &gait, &report));
-            match KNOWN_OFF.iter().find(|(n, _)| *n == name) {
-                Some((_, why)) => assert!(
-                    !within_accuracy(&report),
-                    "{name} is now within {PLAN_ACCURACY} of its plan ({:+.2} %, {:+.2} %): \
-                     remove it from KNOWN_OFF ({why})",
-                    100.0 * d,
-                    100.0 * l
-                ),
-                None => assert!(
-                    within_accuracy(&report),
-                    "{name}: orbit {:.4} m in {:.4} s against the plan's {:.4} m in {:.4} s \
-                     ({:+.2} %, {:+.2} %; limit ±{:.0} %)",
-                    report.step_length_m,
-                    report.step_duration_s,
-                    gait.step_length_m,
-                    gait.step_duration_s,
-                    100.0 * d,
-                    100.0 * l,
-                    100.0 * PLAN_ACCURACY
-                ),
-            }
+            assert!(
+                within_accuracy(&report),
+                "{name}: orbit {:.4} m in {:.4} s against the plan's {:.4} m in {:.4} s \
+                 ({:+.2} %, {:+.2} %; limit ±{:.0} %)",
+                report.step_length_m,
+                report.step_duration_s,
+                gait.step_length_m,
+                gait.step_duration_s,
+                100.0 * d,
+                100.0 * l,
+                100.0 * PLAN_ACCURACY
+            );
         }
     }
     println!("{}", table.join("\n"));

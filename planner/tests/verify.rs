@@ -243,9 +243,8 @@ fn shipped_codesigned_gait_is_stable_on_its_generated_urdf() {
         "/../configs/gaits/adam_codesign.json"
     ));
     let (gait, model) = load_gait_and_robot(path).expect("co-designed gait and URDF load");
-    // A stable orbit of the plan. (Planned on the uniform mesh, it steps 3.6 % slower than
-    // planned; re-planned on the graded mesh it would step 0.1686 m in 0.9025 s, +0.28 %, but
-    // that gait changes the runtime's stand-walk-stop test: configs/gaits/README.md.)
+    // A stable orbit of the plan (planned on the graded mesh with the step held at 0.15 m, it
+    // steps 0.1500 m in 0.9023 s, +0.26 %: configs/gaits/README.md).
     let report = verify_gait(&model, &gait, VerifyOptions::default()).expect("verifies");
     println!("{report}");
     assert!(report.passed(1e-6), "{report}");

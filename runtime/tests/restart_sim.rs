@@ -11,8 +11,9 @@
 //! 0.24 m (`walk.stop_step_length_m`), and a launch ends less far forward (and faster) when the
 //! rear leg would make the torso drop more than 3 cm.
 //!
-//! The graded-mesh re-plan of the default gait walks on from Stand since the launch hands over
-//! onto the planned orbit's angular momentum (`the_replanned_gait_walks_on_from_stand`).
+//! The free graded-mesh re-plan of the default gait (its 0.1686 m step) walks on from Stand
+//! since the launch hands over onto the planned orbit's angular momentum
+//! (`the_replanned_gait_walks_on_from_stand`).
 
 use drivers::sim::robot::SimEvent;
 use runtime::control::{ControlState, OperatorCommand};
@@ -92,9 +93,10 @@ fn walk_after_a_stop_walks_again_on_a_belt_at_a_quarter_metre_per_second() {
     }
 }
 
-/// The graded-mesh re-plan of the default gait (`runtime/tests/fixtures/adam_codesign_graded.json`:
-/// `adam plan --robot configs/robots/adam_codesign.urdf`, 0.1686 m in 0.9000 s, orbit +0.28 %;
-/// its URDF path pointed at `configs/robots/`) with a braking step of `stop_m`.
+/// The free graded-mesh re-plan of the default gait
+/// (`runtime/tests/fixtures/adam_codesign_graded.json`: `adam plan --robot
+/// configs/robots/adam_codesign.urdf`, 0.1686 m in 0.9000 s, orbit +0.28 %; its URDF path
+/// pointed at `configs/robots/`) with a braking step of `stop_m`.
 fn replanned(stop_m: f64) -> Setup {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
     let mut setup = Setup::load(

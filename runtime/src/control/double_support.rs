@@ -24,11 +24,15 @@
 //! z from x behind passes over at v > |x|·√(g/z)), and the rear foot lifts at 1 s.
 //!
 //! # The restart of a re-planned gait (what the braking step decides, and what is left)
-//! The shipped default gait (`configs/gaits/adam_codesign.json`, a uniform-mesh plan whose orbit
-//! is 3.55 % slower than planned) is kept, with its 0.24 m braking step
-//! (`walk.stop_step_length_m`), because its graded-mesh re-plan (0.1686 m in 0.9000 s, orbit
-//! +0.28 %; `runtime/tests/fixtures/adam_codesign_graded.json`) does not yet walk on reliably
-//! from Stand. Its restart after a Stop is solved by the braking step's length:
+//! The shipped default gait (`configs/gaits/adam_codesign.json`) is planned on the graded mesh
+//! with its step held at the old plan's 0.15 m (`configs/planner/adam_default_gait.toml`; orbit
+//! 0.1500 m in 0.9023 s, +0.26 %, against the old uniform-mesh plan's +3.55 %), and keeps the
+//! 0.24 m braking step (`walk.stop_step_length_m`) and the launch below: with it every runtime test
+//! passes unchanged. The free graded-mesh re-plan (0.1686 m in 0.9000 s, orbit +0.28 %;
+//! `runtime/tests/fixtures/adam_codesign_graded.json`) is not the default because it does not yet
+//! walk on reliably from Stand after a Ramp. Its restart after a Stop is solved by the braking
+//! step's length (the figures in this section and the next were measured with the old plan as the
+//! default gait):
 //! - the 0.24 m braking step, tuned on the old plan's 0.15 m steps (1.6 gait steps), leaves the
 //!   re-plan's feet 0.26–0.30 m apart after Stand's rocking; the launch must lower the torso to
 //!   keep the rear foot in reach, the stance knee ends bent (0.71 rad against the gait's

@@ -483,10 +483,14 @@ pub const FIXTURES: [(&str, &str); 3] = [
 
 /// Record the [`FIXTURES`] into `dir` with `setup` (the shipped config and default gait);
 /// returns the files written. To keep them small, the per-tick sample channels are logged at
-/// 50 Hz (`/input` and `/command` are logged every tick regardless) and the state machine's
-/// ramp lasts at least 0.5 s instead of the config's value.
+/// 50 Hz (`/input` and `/command` are logged every tick regardless; the walk at 100 Hz, below)
+/// and the state machine's ramp lasts at least 0.5 s instead of the config's value.
 pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut setup = setup.clone();
+    // The walk's gait tiles (tests/replay.rs) need a sample in the last 5 % of the step's phase;
+    // near the impact the phase advances up to 0.055 per 20 ms, so 50 Hz can miss it.
+    setup.config.telemetry.log_every_n_ticks = 10;
+    let walk_setup = setup.clone();
     setup.config.telemetry.log_every_n_ticks = 20;
     let setup = &setup;
     use crate::rt_loop::{LoopOptions, SimulatedClock};
@@ -500,7 +504,7 @@ pub fn mint_fixtures(setup: &Setup, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut options = SimWalkOptions::new(2.0);
     options.seed = 3;
     options.log_path = Some(paths[0].clone());
-    walk(setup, &options)?;
+    walk(&walk_setup, &options)?;
 
     let mut quick_ramp = setup.clone();
     quick_ramp.config.ramp.min_duration_s = 0.5;
