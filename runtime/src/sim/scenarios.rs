@@ -17,7 +17,7 @@
 //! `10:stop,18:walk` and `--duration 26s` for [`Restart::StopAndWalkAgain`]; `--belt
 //! "0:0,4:0.25"` for [`Restart::BeltAfterWalk`]). `adam bench treadmill --config
 //! configs/runtime/adam_treadmill.toml`, table (d): **5/5, 5/5, 5/5** (before: 2/5, 0/5, 0/5 —
-//! the last with the old timing, below). What the controller does: `runtime::control::speed`,
+//! the middle one with the old timing, below; `--seeds 6,7,8,9,10`: 5/5 each too). What the controller does: `runtime::control::speed`,
 //! "Start and restart"; its tables (a)–(c) and the push bisections are unchanged, figure for
 //! figure.
 //!
