@@ -210,8 +210,9 @@ fn walk_from_stand_on_a_moving_belt_walks() {
 /// 2.8–2.9 s (hip 0.69–0.73 m behind the centre), seeds 1–5 with and without the library. The
 /// launch would have to step sooner (or the robot stand further forward) on a moving belt.
 /// The pitch estimate is not the cause here (the belt does not ramp under the standing robot):
-/// unchanged by the legs' pitch in Stand (`runtime::sim::scenarios`). Not met by any controller:
-/// the belt moves from t = 0, so the robot is 0.5 m back before Walk and a launch takes 1 s more;
+/// unchanged by the legs' pitch in Stand (`runtime::sim::scenarios`). The belt moves from t = 0,
+/// so the robot is 0.5 m back before Walk, some 0.15 m from losing its rear foot, and the 1 s
+/// launch alone is carried 0.25 m: it would have to step within 0.6 s of Walk;
 /// the 1.6 m-belt start of issue #29 with the belt started once the robot stands passes with
 /// the treadmill config (`tests/treadmill.rs::starts_and_restarts_on_the_moving_belt`).
 #[test]
