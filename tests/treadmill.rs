@@ -9,6 +9,7 @@
 //! after it.
 
 use drivers::sim::robot::{BeltEnd, FallCause};
+use runtime::control::ControlState;
 use runtime::sim::run::{walk, SimWalkReport};
 use runtime::sim::scenarios::{
     belt_steps, constant_belt, max_abs_position_after_m, max_abs_position_m, outcome,
@@ -240,11 +241,10 @@ fn rides_through_pushes_at_every_point_of_the_step() {
     }
 }
 
-/// From Stand, restart after a stop, and the belt started after the walk: no trip or fall.
-/// Why the first two fail: `runtime::sim::scenarios`, "Why the start on a ramping belt
-/// stalls".
+/// From Stand, restart after a stop, and the belt started after the walk: no trip or fall, and
+/// the restart goes through Stand (Stop → Stand → Walk). How: `runtime::control::speed`,
+/// "Start and restart"; the scenarios and what was measured: `runtime::sim::scenarios`.
 #[test]
-#[ignore = "issue #29 item 6, missed (re-measured 2026-12-05 with the legs' pitch in Stand, seeds 1-5): Walk from Stand on the belt ramped to 0.25 m/s 2 of 5 (seeds 1, 3, 4 off the back at 6.98-8.40 s: carried 0.4 m back before the first step, the library speed climbs 0.02 m/s a step); stop and walk again 0 of 5 (off the back at 6.98-10.09 s); belt started after Walk 0 of 5 (step timeouts at 8.44-9.51 s); runtime::sim::scenarios"]
 fn starts_and_restarts_on_the_moving_belt() {
     for case in Restart::ALL {
         for seed in SEEDS {
@@ -255,6 +255,19 @@ fn starts_and_restarts_on_the_moving_belt() {
                 case.name(),
                 outcome(&r)
             );
+            if case == Restart::StopAndWalkAgain {
+                let states: Vec<_> = r.summary.transitions.iter().map(|t| t.2).collect();
+                assert!(
+                    states.ends_with(&[
+                        ControlState::Walk,
+                        ControlState::Stop,
+                        ControlState::Stand,
+                        ControlState::Walk
+                    ]),
+                    "seed {seed}: {:?}",
+                    r.summary.transitions
+                );
+            }
         }
     }
 }

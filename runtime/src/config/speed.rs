@@ -83,6 +83,45 @@ pub struct SpeedConfig {
     /// command): room below a belt slower than the library walks.
     #[serde(default)]
     pub lever_below_library: bool,
+    /// Walk from Stand: the launch aims at the orbit of the library gait this fraction of the
+    /// way from the gait Stand stood in to the one that walks the commanded speed (0, the
+    /// default: the Stand gait), and the first step walks it.
+    #[serde(default)]
+    pub launch_gait_fraction: f64,
+    /// The first impact after a Walk from Stand (and after a Stop) sets the library speed
+    /// without `max_change_per_step_mps` (false, the default: limited): the start gets up to
+    /// the belt's speed at once.
+    #[serde(default)]
+    pub first_step_unlimited: bool,
+    /// The position on the belt counts from Start (the robot at the centre), the belt's travel
+    /// while standing included (false, the default: from each Walk).
+    #[serde(default)]
+    pub position_from_start: bool,
+    /// The integral rests for this many impacts after a Walk from Stand (and during a Stop):
+    /// the first steps after a launch walk off their gait's calibration.
+    #[serde(default)]
+    pub integral_delay_steps: u32,
+    /// When the operator starts the belt (from rest) while the robot walks, for this many
+    /// impacts the position loop's reference follows the estimate (the command is the belt's
+    /// speed) and the step lever rests: the belt's ramp shoves the robot forward over the belt,
+    /// which is not a position error to correct at once (0, the default: none).
+    #[serde(default)]
+    pub belt_start_settle_steps: u32,
+    /// Then the reference glides back to the centre at this speed, m/s (0: it jumps back).
+    #[serde(default)]
+    pub reference_glide_mps: f64,
+    /// A Stop on a moving belt first walks to this far ahead of the centre, m (0, the default:
+    /// it brakes at once): the robot then stands longer before the belt carries it off the back.
+    #[serde(default)]
+    pub stop_ahead_m: f64,
+    /// ... at the belt's speed plus this, m/s.
+    #[serde(default)]
+    pub stop_approach_mps: f64,
+    /// A Stop with speed control brakes only after a step on a library gait of at most this
+    /// speed σ, m/s (0, the default: brakes from any gait): the braking step does not stop the
+    /// fast gaits.
+    #[serde(default)]
+    pub stop_library_mps: f64,
 }
 
 /// Where the robot's position along the belt comes from.
@@ -111,6 +150,15 @@ impl Default for SpeedConfig {
             walked_mps: Vec::new(),
             below_library_mps: 0.0,
             lever_below_library: false,
+            launch_gait_fraction: 0.0,
+            first_step_unlimited: false,
+            position_from_start: false,
+            integral_delay_steps: 0,
+            belt_start_settle_steps: 0,
+            reference_glide_mps: 0.0,
+            stop_ahead_m: 0.0,
+            stop_approach_mps: 0.0,
+            stop_library_mps: 0.0,
         }
     }
 }
@@ -147,6 +195,11 @@ impl SpeedConfig {
                 self.slow_step_length_gain_s,
             ),
             ("speed.below_library_mps", self.below_library_mps),
+            ("speed.launch_gait_fraction", self.launch_gait_fraction),
+            ("speed.reference_glide_mps", self.reference_glide_mps),
+            ("speed.stop_ahead_m", self.stop_ahead_m),
+            ("speed.stop_approach_mps", self.stop_approach_mps),
+            ("speed.stop_library_mps", self.stop_library_mps),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {
@@ -171,6 +224,15 @@ impl SpeedConfig {
                         .into(),
                 });
             }
+        }
+        if self.launch_gait_fraction > 1.0 {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "speed.launch_gait_fraction".into(),
+                value: self.launch_gait_fraction.to_string(),
+                reason: "must be within [0, 1] (a fraction of the way to the command's gait)"
+                    .into(),
+            });
         }
         if let Some(v) = self
             .walked_mps

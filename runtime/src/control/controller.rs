@@ -54,12 +54,15 @@
 //! the robot rocks from foot to foot a few times and comes to rest
 //! (`runtime/tests/stop_sim.rs`). Not longer: Walk again launches from that stance, and from a
 //! 0.30 m braking step (feet 0.34 m apart) the launch bent the stance knee until it saturated
-//! once the rear foot lifted (`runtime/tests/restart_sim.rs`).
+//! once the rear foot lifted (`runtime/tests/restart_sim.rs`). With treadmill speed control on
+//! a moving belt a Stop may first walk ahead and slow to a gait the braking step stops, and a
+//! Walk from Stand may launch onto a faster gait (`runtime::control::speed`, "Start and
+//! restart").
 
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
 use super::orbit::OrbitLever;
-use super::speed::{SpeedLibrary, SpeedRegulator, StepLever};
+use super::speed::{SpeedLibrary, SpeedMap, SpeedRegulator, StepLever};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
     braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
@@ -430,6 +433,7 @@ impl Controller {
             (OperatorCommand::Damp, _) => self.enter(S::Damping, status),
             (OperatorCommand::Start, S::Idle) => {
                 self.gains_on_t_s = Some(t_s);
+                self.regulator.at_start();
                 self.stance = self.gait.first_stance;
                 self.stand_hold = None;
                 self.begin_ramp(t_s);
@@ -439,14 +443,18 @@ impl Controller {
                 self.step_start_t_s = t_s;
                 self.touchdown_ticks = 0;
                 self.steps = 0;
-                self.regulator.restart();
+                self.regulator.restart_from_stand();
                 self.step_lever.offset_m = 0.0;
+                self.launch_gait();
                 self.launch_requested = true;
                 self.enter(S::Walk, status);
             }
             (OperatorCommand::Stop, S::Walk) => {
                 self.stop_touchdown_t_s = None;
                 self.braking = false;
+                if self.library.is_some() && self.regulator.active() {
+                    self.regulator.begin_stop();
+                }
                 self.enter(S::Stop, status);
             }
             (OperatorCommand::Reset, S::Damping) => {
@@ -511,6 +519,7 @@ impl Controller {
                 .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
         }
         // Operator, then safety (a trip overrides any request).
+        self.regulator.walking = self.state == ControlState::Walk;
         if let Some(cmd) = input.operator {
             if !self.regulator.operator(cmd) {
                 self.handle_operator(cmd, t, status);
@@ -654,8 +663,15 @@ impl Controller {
                     self.touchdown_ticks = 0;
                     self.last_foot = None;
                     self.steps = self.steps.saturating_add(1);
-                    // Stop: the step under way ends, then the braking step, then Stand.
-                    if self.state == ControlState::Stop {
+                    // Stop: the step under way ends, then the braking step, then Stand (with
+                    // speed control, the Stop's approach and slowing steps first).
+                    let approach = self.state == ControlState::Stop
+                        && !self.braking
+                        && self.stop_touchdown_t_s.is_none()
+                        && self.library.is_some()
+                        && self.regulator.active()
+                        && self.regulator.stopping();
+                    if self.state == ControlState::Stop && !approach {
                         if self.braking {
                             self.stop_touchdown_t_s = Some(t);
                         }
@@ -664,7 +680,7 @@ impl Controller {
                     // The new step starts at the measured phase, at the speed of the old one.
                     let mut rate = self.phase_hat.map_or(0.0, |(_, r, _)| r);
                     eval = self.walk_references(t, &leg_q, &leg_dq);
-                    if self.state == ControlState::Walk && self.regulator.active() {
+                    if (self.state == ControlState::Walk || approach) && self.regulator.active() {
                         speed_update = true;
                         rate = self.switch_speed(
                             step_length_m,
@@ -673,6 +689,10 @@ impl Controller {
                             (t, &leg_q, &leg_dq),
                             &mut eval,
                         );
+                        if approach && self.regulator.brake_now() {
+                            self.braking = true;
+                            eval = self.walk_references(t, &leg_q, &leg_dq);
+                        }
                     }
                     self.phase_hat = Some((eval.phase, rate, t));
                     self.observe_phase(t, &mut eval);
@@ -740,6 +760,31 @@ impl Controller {
             speed: self.regulator.status,
             speed_update,
         };
+    }
+
+    /// Walk from Stand with speed control on a moving belt: the launch and the first step walk
+    /// the library gait `speed.launch_gait_fraction` of the way from the Stand gait to the one
+    /// that walks the belt's speed (`runtime::control::speed`, "Start and restart").
+    fn launch_gait(&mut self) {
+        let fraction = self.regulator.start_settings().launch_gait_fraction;
+        let Some(library) = &self.library else {
+            return;
+        };
+        let s = self.regulator.status;
+        if !(fraction > 0.0 && self.regulator.active() && s.belt_mps > 0.0) {
+            return;
+        }
+        let (lo, hi) = library.range_mps();
+        let target = library.sigma_for(s.belt_mps + s.offset_mps).clamp(lo, hi);
+        let from = if s.library_mps.is_finite() {
+            s.library_mps
+        } else {
+            lo
+        };
+        let sigma = from + fraction * (target - from);
+        library.blend_into(sigma, &mut self.gait, &mut self.lunge, &mut self.step_lever);
+        self.orbit.select(sigma);
+        self.regulator.status.library_mps = sigma;
     }
 
     /// At an impact in Walk with speed control on: measures the step that ended, runs the

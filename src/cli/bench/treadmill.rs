@@ -225,7 +225,7 @@ pub(crate) fn tables(
     }
     writeln!(
         out,
-        "\n(d) start and restart (from Stand: Start at 0 s, the controller's ramp to Stand; 20 s)"
+        "\n(d) start and restart (from Stand: Start at 0 s, the controller's ramp to Stand; 20 s; stop and walk again: Stop at 10 s, Walk at 18 s, 26 s)"
     )?;
     writeln!(out, "{:<38} {:>14}  outcomes", "case", "no trip/fall")?;
     for c in Restart::ALL {

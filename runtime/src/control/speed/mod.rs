@@ -68,6 +68,38 @@
 //! m/s after the step down, and +7.5 N at 10 % of the step rides through in 3 of 5 — as the
 //! removed `command_share = 0` law did (below). No one set of gains was found for both.
 //!
+//! # Start and restart on a moving belt (the treadmill config's `[speed]`; off by default)
+//! A robot standing on a belt at b is carried back b metres a second (0.25 m/s: the 1.6 m
+//! belt's back end is some 2.6 s away from its centre), so a walk from Stand must get up to the
+//! belt's speed at once, and a Stop must not leave the robot where it cannot stand:
+//! - **Walk from Stand** (`launch_gait_fraction` 0.5, `first_step_unlimited`): the launch and
+//!   the first step walk the library gait halfway from the gait Stand stood in to the one that
+//!   walks the belt's speed (the launch aims at its orbit, `orbit_table`), and the first impact
+//!   sets σ for the command without the 0.02 m/s-per-step limit (then limited again);
+//! - **the position** (`position_from_start`) counts from Start, when the robot stands at the
+//!   centre: the belt's travel while standing is part of it (a real robot's odometry does the
+//!   same with the operator's belt speed), and the regulator's integral rests for the first
+//!   `integral_delay_steps` (6) impacts after the launch, whose steps walk off their gait's
+//!   calibration;
+//! - **the belt started under the walking robot** (`belt_start_settle_steps` 6,
+//!   `reference_glide_mps` 0.02): its ramp shoves the robot forward over the belt (steps at
+//!   0.4–0.5 m/s); for 6 impacts the command is the belt's speed (the position loop's reference
+//!   follows the estimate) and the step lever rests, then the reference glides back to the
+//!   centre at 0.02 m/s. A belt that changes speed while moving is not affected;
+//! - **a Stop** on a moving belt (`stop_ahead_m` 0.35, `stop_approach_mps` 0.12,
+//!   `stop_library_mps` 0.21): first walks to 0.35 m ahead of the centre at the belt's speed
+//!   plus 0.12 m/s (at most 12 impacts), then slows to a library gait of σ ≤ 0.21 m/s (walks
+//!   0.25 m/s; the braking step does not stop the 0.30–0.35 m/s gaits) and brakes after a step
+//!   on it. Standing at p ahead of the centre, the robot has (p + 0.6 m)/b − 1.5 s before the
+//!   launch and first step of the next Walk take it off the back: 2.3 s from 0.35 m at
+//!   0.25 m/s, 0.9 s from the centre.
+//!
+//! None acts on a walk that starts in the gait's own state, so the constant-belt, belt-step and
+//! push runs of `adam bench treadmill` are unchanged figure for figure. What they do on the
+//! 1.6 m belt (table (d), seeds 1–5): from Stand 5/5 (before 2/5), Stop → Stand → Walk 5/5,
+//! the belt started after the walk 5/5 (before 0/5); how each was traced, what was tried and
+//! the scenario's timing: `runtime::sim::scenarios`.
+//!
 //! # The walked-speed calibration (identified 2026-12-05)
 //! The library gait of speed σ walks c(σ), not σ (below, "Why the library speed does not set
 //! the walked speed"). With `speed.walked_mps` (c at each library gait; the treadmill config

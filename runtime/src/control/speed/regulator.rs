@@ -46,6 +46,67 @@ pub(in crate::control) struct SpeedRegulator {
     /// last two steps, a stride: left and right steps differ).
     previous_step: Option<(f64, f64)>,
     pub(in crate::control) status: SpeedStatus,
+    /// The start and restart settings (`speed.launch_gait_fraction` ...).
+    start: StartSettings,
+    /// The next impact sets σ without the per-step limit.
+    unlimited_next: bool,
+    /// Impacts since the last Walk from Stand.
+    steps_since_walk: u32,
+    /// The position loop's reference, m (0: the centre).
+    reference_m: f64,
+    /// Impacts left during which the reference follows the estimate (after the belt started).
+    settle_left: u32,
+    /// The controller walks (the belt starting while it walks starts the settling).
+    pub(in crate::control) walking: bool,
+    /// A Stop under way with speed control: its approach and slowing steps.
+    stop: Option<StopPhase>,
+}
+
+/// Where a Stop with speed control is (`runtime::control::speed`, "Start and restart").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum StopPhase {
+    /// Walking toward `speed.stop_ahead_m`: impacts so far.
+    Approach(u32),
+    /// There: the steps slow to `speed.stop_library_mps`.
+    Slowing,
+    /// The next step is the braking step.
+    Brake,
+}
+
+/// How near its stop target a Stop's approach ends, m.
+const STOP_TARGET_TOLERANCE_M: f64 = 0.05;
+
+/// A Stop's approach brakes after this many impacts even short of its target.
+const STOP_APPROACH_MAX_STEPS: u32 = 12;
+
+/// The start and restart part of [`SpeedConfig`].
+#[derive(Clone, Copy, Debug)]
+pub(in crate::control) struct StartSettings {
+    pub(in crate::control) launch_gait_fraction: f64,
+    first_step_unlimited: bool,
+    position_from_start: bool,
+    integral_delay_steps: u32,
+    belt_start_settle_steps: u32,
+    reference_glide_mps: f64,
+    stop_ahead_m: f64,
+    stop_approach_mps: f64,
+    stop_library_mps: f64,
+}
+
+impl From<&SpeedConfig> for StartSettings {
+    fn from(c: &SpeedConfig) -> Self {
+        Self {
+            launch_gait_fraction: c.launch_gait_fraction,
+            first_step_unlimited: c.first_step_unlimited,
+            position_from_start: c.position_from_start,
+            integral_delay_steps: c.integral_delay_steps,
+            belt_start_settle_steps: c.belt_start_settle_steps,
+            reference_glide_mps: c.reference_glide_mps,
+            stop_ahead_m: c.stop_ahead_m,
+            stop_approach_mps: c.stop_approach_mps,
+            stop_library_mps: c.stop_library_mps,
+        }
+    }
 }
 
 impl SpeedRegulator {
@@ -69,7 +130,57 @@ impl SpeedRegulator {
             last_t_s: None,
             previous_step: None,
             status,
+            start: StartSettings::from(config),
+            unlimited_next: false,
+            steps_since_walk: 0,
+            reference_m: 0.0,
+            settle_left: 0,
+            walking: false,
+            stop: None,
         }
+    }
+
+    /// The start and restart settings.
+    pub(in crate::control) fn start_settings(&self) -> &StartSettings {
+        &self.start
+    }
+
+    /// Start (the Ramp to Stand begins): the robot stands at the belt's centre; with
+    /// `speed.position_from_start` the position counts from here.
+    pub(in crate::control) fn at_start(&mut self) {
+        self.belt_travel_m = 0.0;
+        self.status.position_m = 0.0;
+        self.reference_m = 0.0;
+    }
+
+    /// A Stop begins (speed control on, a library): with `speed.stop_ahead_m` on a moving belt
+    /// the steps first walk to that far ahead; with `speed.stop_library_mps` they then slow to
+    /// that gait; then the braking step ([`SpeedRegulator::brake_now`]). Neither: it brakes
+    /// at once, as without speed control.
+    pub(in crate::control) fn begin_stop(&mut self) {
+        let st = self.start;
+        let ahead = st.stop_ahead_m > 0.0 && self.status.belt_mps > 0.0;
+        self.stop = if ahead {
+            self.reference_m = st.stop_ahead_m;
+            self.settle_left = 0;
+            self.unlimited_next |= st.first_step_unlimited;
+            Some(StopPhase::Approach(0))
+        } else if st.stop_library_mps > 0.0 {
+            Some(StopPhase::Slowing)
+        } else {
+            None
+        };
+    }
+
+    /// A Stop walks its approach or slowing steps (the controller runs the regulator at its
+    /// impacts and brakes once [`SpeedRegulator::brake_now`]).
+    pub(in crate::control) fn stopping(&self) -> bool {
+        self.stop.is_some()
+    }
+
+    /// The step that starts at this impact is the braking step.
+    pub(in crate::control) fn brake_now(&self) -> bool {
+        self.stop == Some(StopPhase::Brake)
     }
 
     /// Whether a belt speed is known (speed control runs only then).
@@ -82,6 +193,10 @@ impl SpeedRegulator {
         let s = &mut self.status;
         match cmd {
             OperatorCommand::Belt { speed_mps } if speed_mps.is_finite() => {
+                // The belt started (from rest) under the walking robot.
+                if self.walking && s.belt_mps == 0.0 && speed_mps != 0.0 {
+                    self.settle_left = self.start.belt_start_settle_steps;
+                }
                 s.belt_mps = speed_mps;
             }
             OperatorCommand::Offset { speed_mps } if speed_mps.is_finite() => {
@@ -104,12 +219,33 @@ impl SpeedRegulator {
         self.last_t_s = Some(t_s);
     }
 
-    /// Forgets the steps (a walk begins): position 0, no integral, no belt travel.
+    /// Forgets the steps (a walk begins in the gait's own post-impact state): position 0, no
+    /// integral, no belt travel.
     pub(in crate::control) fn restart(&mut self) {
-        self.belt_travel_m = 0.0;
+        self.forget(false);
+    }
+
+    /// Forgets the steps as a Walk from Stand begins: no integral (resting
+    /// `speed.integral_delay_steps` impacts), the first impact's σ unlimited with
+    /// `speed.first_step_unlimited`; position 0 and no belt travel, or with
+    /// `speed.position_from_start` both kept (the position counts from Start).
+    pub(in crate::control) fn restart_from_stand(&mut self) {
+        self.forget(true);
+    }
+
+    fn forget(&mut self, from_stand: bool) {
+        let st = self.start;
         self.previous_step = None;
+        self.unlimited_next = from_stand && st.first_step_unlimited;
+        self.steps_since_walk = if from_stand { 0 } else { u32::MAX };
+        self.reference_m = 0.0;
+        self.settle_left = 0;
+        self.stop = None;
         let s = &mut self.status;
-        s.position_m = 0.0;
+        if !(from_stand && st.position_from_start) {
+            self.belt_travel_m = 0.0;
+            s.position_m = 0.0;
+        }
         s.integral_mps = 0.0;
         s.step_offset_m = 0.0;
         s.step_speed_mps = f64::NAN;
@@ -171,11 +307,35 @@ impl SpeedRegulator {
         } else {
             self.position_gain_per_s
         };
-        s.requested_mps = s.belt_mps + s.offset_mps - k_p * s.position_m;
+        // The reference: following the estimate while the robot settles after the belt started,
+        // then gliding back to the centre; a Stop's target ahead.
+        let settling = measured && self.settle_left > 0;
+        if settling {
+            self.settle_left -= 1;
+            self.reference_m = s.position_m;
+        } else if measured && self.stop.is_none() {
+            let glide = self.start.reference_glide_mps * duration_s;
+            self.reference_m -= if glide > 0.0 {
+                self.reference_m.clamp(-glide, glide)
+            } else {
+                self.reference_m
+            };
+        }
+        self.steps_since_walk = self.steps_since_walk.saturating_add(1);
+        s.requested_mps = match self.stop {
+            // A Stop's approach walks ahead at a set speed over the belt's.
+            Some(StopPhase::Approach(_)) if self.start.stop_approach_mps > 0.0 => {
+                s.belt_mps + s.offset_mps + self.start.stop_approach_mps
+            }
+            _ => s.belt_mps + s.offset_mps - k_p * (s.position_m - self.reference_m),
+        };
         s.commanded_mps = s.requested_mps.clamp(lo, hi);
         s.clamped = s.commanded_mps != s.requested_mps;
-        let integral = (s.integral_mps + self.integral_gain * error)
-            .clamp(-self.integral_limit_mps, self.integral_limit_mps);
+        let resting =
+            self.steps_since_walk <= self.start.integral_delay_steps || self.stop.is_some();
+        let k_i = if resting { 0.0 } else { self.integral_gain };
+        let integral =
+            (s.integral_mps + k_i * error).clamp(-self.integral_limit_mps, self.integral_limit_mps);
         // The library gait of the command, plus the step-to-step feedback.
         let sigma = map.sigma_for(s.commanded_mps + self.speed_gain * error + integral);
         // Anti-windup: the integral only grows while σ is inside the library.
@@ -187,7 +347,11 @@ impl SpeedRegulator {
         } else {
             map.sigma_for(s.commanded_mps)
         };
-        let r = self.max_change_per_step_mps;
+        let r = if std::mem::take(&mut self.unlimited_next) {
+            f64::INFINITY
+        } else {
+            self.max_change_per_step_mps
+        };
         s.library_mps = sigma.clamp(sigma_lo, sigma_hi).clamp(last - r, last + r);
         // The step lever: a step faster than the command lands the next step longer (more
         // speed lost in its impact), a slower one shorter. The last step's speed, not the
@@ -203,7 +367,9 @@ impl SpeedRegulator {
                 s.commanded_mps
             };
             let fast = s.step_speed_mps - reference;
-            let gain = if fast < 0.0 {
+            let gain = if settling {
+                0.0
+            } else if fast < 0.0 {
                 self.slow_step_length_gain_s
             } else {
                 self.step_length_gain_s
@@ -212,7 +378,37 @@ impl SpeedRegulator {
         } else {
             0.0
         };
-        s.library_mps
+        let position_m = s.position_m;
+        self.stop_step(position_m, last, range_mps);
+        self.status.library_mps
+    }
+
+    /// A Stop's step at an impact: the approach ends at its target (or after
+    /// [`STOP_APPROACH_MAX_STEPS`]); slowing caps σ at `speed.stop_library_mps` and brakes
+    /// once the step that ended walked a gait no faster (`last`, m/s).
+    fn stop_step(&mut self, position_m: f64, last: f64, (sigma_lo, sigma_hi): (f64, f64)) {
+        let Some(phase) = self.stop else {
+            return;
+        };
+        let there = position_m >= self.reference_m - STOP_TARGET_TOLERANCE_M;
+        self.stop = Some(match phase {
+            StopPhase::Approach(n) if !there && n + 1 < STOP_APPROACH_MAX_STEPS => {
+                StopPhase::Approach(n + 1)
+            }
+            _ => StopPhase::Slowing,
+        });
+        if self.stop == Some(StopPhase::Slowing) {
+            let slow = if self.start.stop_library_mps > 0.0 {
+                self.start.stop_library_mps.clamp(sigma_lo, sigma_hi)
+            } else {
+                sigma_hi
+            };
+            let s = &mut self.status;
+            if last <= slow + 1e-9 {
+                self.stop = Some(StopPhase::Brake);
+            }
+            s.library_mps = s.library_mps.min(slow);
+        }
     }
 }
 
@@ -410,6 +606,107 @@ mod tests {
         r.on_impact_mapped(0.2, 0.8, (0.15, 0.35), &Fast);
         assert!(r.status.clamped);
         assert!((r.status.commanded_mps - 0.42).abs() < 1e-12);
+    }
+
+    /// The treadmill config's start and restart settings.
+    fn start_config() -> SpeedConfig {
+        SpeedConfig {
+            first_step_unlimited: true,
+            position_from_start: true,
+            integral_delay_steps: 2,
+            belt_start_settle_steps: 2,
+            reference_glide_mps: 0.02,
+            stop_ahead_m: 0.35,
+            stop_approach_mps: 0.12,
+            stop_library_mps: 0.21,
+            ..SpeedConfig::default()
+        }
+    }
+
+    #[test]
+    fn a_walk_from_stand_keeps_the_belt_travel_and_its_first_impact_jumps_to_the_command() {
+        let mut r = SpeedRegulator::new(&start_config(), 0.15);
+        r.at_start();
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        // Standing 1 s on the belt: 0.25 m back, kept at Walk.
+        for k in 0..=1000 {
+            r.advance(f64::from(k) * 1e-3);
+        }
+        r.restart_from_stand();
+        r.belt_travel_m += 0.25;
+        // The launch and first step: 0.15 m while the belt ran 0.25 m.
+        let sigma = r.on_impact(0.15, 1.0, (0.15, 0.40));
+        assert!((r.status.position_m + 0.35).abs() < 1e-9, "{:?}", r.status);
+        // Behind the centre: the command is above the belt's, and σ goes there at once.
+        assert!(r.status.commanded_mps > 0.3);
+        assert!(
+            (sigma - r.status.commanded_mps).abs() < 1e-12,
+            "σ = {sigma}"
+        );
+        // Then limited again; the integral rests for the first impacts.
+        let before = r.status.library_mps;
+        r.belt_travel_m = 0.1;
+        let sigma = r.on_impact(0.1, 1.0, (0.15, 0.40));
+        assert!((sigma - before).abs() <= 0.02 + 1e-12);
+        assert_eq!(r.status.integral_mps, 0.0);
+        // A walk from the gait's own state forgets the position and is limited from the start.
+        r.restart();
+        assert_eq!(r.status.position_m, 0.0);
+        let last = r.status.library_mps;
+        let sigma = r.on_impact(0.15, 1.0, (0.15, 0.40));
+        assert!(
+            (sigma - (last - 0.02)).abs() < 1e-12,
+            "σ = {sigma} after {last}"
+        );
+    }
+
+    #[test]
+    fn the_belt_started_under_the_walking_robot_is_ridden_out_then_the_reference_glides_back() {
+        let mut r = SpeedRegulator::new(&start_config(), 0.15);
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.0 }));
+        r.walking = true;
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        // A shoved step 0.2 m ahead: the command stays the belt's, no longer step.
+        r.on_impact(0.2, 0.5, (0.15, 0.40));
+        assert_eq!(r.status.requested_mps, 0.25);
+        assert_eq!(r.status.step_offset_m, 0.0);
+        r.on_impact(0.125, 0.5, (0.15, 0.40));
+        assert_eq!(r.status.requested_mps, 0.25);
+        // Then the reference glides back (0.02 m/s over a 0.5 s step): a small pull back.
+        r.belt_travel_m = 0.125;
+        r.on_impact(0.125, 0.5, (0.15, 0.40));
+        assert!(r.status.requested_mps < 0.25 && r.status.requested_mps > 0.24);
+        // A belt that changes speed while moving does not start it again.
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.30 }));
+        assert_eq!(r.settle_left, 0);
+    }
+
+    #[test]
+    fn a_stop_on_a_moving_belt_walks_ahead_then_slows_then_brakes() {
+        let mut r = regulator(&start_config());
+        r.status.library_mps = 0.21;
+        r.begin_stop();
+        assert!(r.stopping() && !r.brake_now());
+        // Approach: the belt's speed plus the approach speed, whatever the position loop says.
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.40));
+        assert!((r.status.requested_mps - 0.37).abs() < 1e-12);
+        assert!(!r.brake_now());
+        // There (within 5 cm of 0.35 m ahead), on a fast gait: one slowing step at 0.21 ...
+        r.status.library_mps = 0.33;
+        r.status.position_m = 0.3;
+        r.belt_travel_m = 0.2;
+        let sigma = r.on_impact(0.2, 0.8, (0.15, 0.40));
+        assert!((sigma - 0.21).abs() < 1e-12, "σ = {sigma}");
+        assert!(!r.brake_now());
+        // ... then the braking step.
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.40));
+        assert!(r.brake_now());
+        // Without the settings a Stop brakes at once.
+        let mut r = regulator(&SpeedConfig::default());
+        r.begin_stop();
+        assert!(!r.stopping());
     }
 
     #[test]
