@@ -43,6 +43,10 @@ const EMBEDDED: [(&str, &str); 17] = [
         include_str!("../../configs/planner/adam.toml"),
     ),
     (
+        "planner/adam_default_gait.toml",
+        include_str!("../../configs/planner/adam_default_gait.toml"),
+    ),
+    (
         "planner/adam_library.toml",
         include_str!("../../configs/planner/adam_library.toml"),
     ),
