@@ -226,7 +226,7 @@ fn follows_a_belt_step_up_and_back_within_8_steps() {
 /// −20 N and +40 N for 0.2 s at five points of the step ride through in ≥ 4 of 5 seeds.
 ///
 /// Passes within the scenario's watch (`PUSH_WATCH_S`, 4 s after the push is armed) since the
-/// stall relaunch (`walk.stall_relaunch_s = 1.0` in the treadmill config,
+/// stall relaunch (`speed.stall_relaunch_s = 1.0` in the treadmill config,
 /// `runtime::control::recovery`), but kept ignored: it is not a ride-through yet. Measured
 /// (2026-12-05, seeds 1–5, ridden through at 10/30/50/70/90 %): within the watch, −20 N
 /// 5/5 at every point (at 10, 30 and 90 % each by one relaunch), +40 N 5/5 at every point (7 by a

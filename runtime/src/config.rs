@@ -192,12 +192,6 @@ pub struct WalkConfig {
     /// then holds the landing pose (runtime::controller docs).
     #[serde(default = "default_stop_step_length_m")]
     pub stop_step_length_m: f64,
-    /// The stall relaunch, s: a Walk step whose phase has made no progress for this long with
-    /// both feet down (a backward push stopped the torso short of the stance foot) starts again
-    /// from double support, as Walk from Stand launches (`runtime::control::recovery`); once per
-    /// step, the step timeout (`safety.stall_timeout_s`, longer) the last resort. 0: off.
-    #[serde(default)]
-    pub stall_relaunch_s: f64,
 }
 
 /// Torso pitch estimator (see [`crate::estimator`]).
@@ -644,11 +638,10 @@ impl RuntimeConfig {
         non_negative("walk.impact_min_phase", w.impact_min_phase)?;
         non_negative("walk.reference_lead_s", w.reference_lead_s)?;
         positive("walk.stop_step_length_m", w.stop_step_length_m)?;
-        non_negative("walk.stall_relaunch_s", w.stall_relaunch_s)?;
-        if w.stall_relaunch_s >= self.safety.stall_timeout_s {
+        if self.speed.stall_relaunch_s >= self.safety.stall_timeout_s {
             return Err(bad(
-                "walk.stall_relaunch_s",
-                w.stall_relaunch_s.to_string(),
+                "speed.stall_relaunch_s",
+                self.speed.stall_relaunch_s.to_string(),
                 "must be shorter than safety.stall_timeout_s (the step timeout is the last resort)",
             ));
         }

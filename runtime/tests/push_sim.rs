@@ -148,7 +148,7 @@ fn treadmill_setup(relaunch_s: f64) -> Setup {
         format!("{root}/{}", runtime::DEFAULT_GAIT),
     )
     .expect("the treadmill config and its library load");
-    setup.config.walk.stall_relaunch_s = relaunch_s;
+    setup.config.speed.stall_relaunch_s = relaunch_s;
     setup
 }
 

@@ -220,13 +220,13 @@ fn logging_the_ticks_can_frames_allocates_nothing() {
     let _ = std::fs::remove_file(&path);
 }
 
-/// The stall relaunch (`walk.stall_relaunch_s`) allocates nothing either: a walk held rigidly in
+/// The stall relaunch (`speed.stall_relaunch_s`) allocates nothing either: a walk held rigidly in
 /// the gait's post-impact pose (both feet down, no progress) relaunches from double support
 /// inside the counted ticks, then hands over to the step.
 #[test]
 fn the_stall_relaunch_allocates_nothing() {
     let mut setup = Setup::shipped().expect("shipped setup");
-    setup.config.walk.stall_relaunch_s = 0.3;
+    setup.config.speed.stall_relaunch_s = 0.3;
     setup.config.safety.stall_timeout_s = 1e9;
     let q0 = setup
         .gait

@@ -83,6 +83,14 @@ pub struct SpeedConfig {
     /// command): room below a belt slower than the library walks.
     #[serde(default)]
     pub lever_below_library: bool,
+    /// The stall relaunch, s (0, the default: off): a Walk step whose phase has made no
+    /// progress for this long, the robot nearly at rest on both feet (a backward push stopped
+    /// the torso short of the stance foot; on a moving belt it is then carried back), starts
+    /// again from double support, as Walk from Stand launches (`runtime::control::recovery`;
+    /// 1.0 in `configs/runtime/adam_treadmill.toml`). Once per step; shorter than
+    /// `safety.stall_timeout_s`, which stays the last resort. Acts with or without a library.
+    #[serde(default)]
+    pub stall_relaunch_s: f64,
 }
 
 /// Where the robot's position along the belt comes from.
@@ -111,6 +119,7 @@ impl Default for SpeedConfig {
             walked_mps: Vec::new(),
             below_library_mps: 0.0,
             lever_below_library: false,
+            stall_relaunch_s: 0.0,
         }
     }
 }
@@ -147,6 +156,7 @@ impl SpeedConfig {
                 self.slow_step_length_gain_s,
             ),
             ("speed.below_library_mps", self.below_library_mps),
+            ("speed.stall_relaunch_s", self.stall_relaunch_s),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {

@@ -16,7 +16,7 @@
 //! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
 //!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles, the
 //!       landed pose's gravity torques fed forward
-//! Walk: no progress of τ for walk.stall_relaunch_s, at rest on both feet ──▶ relaunch from
+//! Walk: no progress of τ for speed.stall_relaunch_s, at rest on both feet ──▶ relaunch from
 //!       double support (as Walk from Stand, 0.5 s; once per step; `recovery`)
 //! Walk/Stop: no progress of τ for safety.stall_timeout_s ──▶ Damping (Trip::StepTimeout)
 //!   ▼
@@ -303,7 +303,7 @@ impl Controller {
             steps: 0,
             step_start_t_s: 0.0,
             progress: ProgressWatch::new(config.safety.stall_timeout_s),
-            stall: StallDetector::new(config.walk.stall_relaunch_s),
+            stall: StallDetector::new(config.speed.stall_relaunch_s),
             recoveries: 0,
             touchdown_ticks: 0,
             last_foot: None,

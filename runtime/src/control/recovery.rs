@@ -17,7 +17,7 @@
 //! pitch; the swing foot's height from the same kinematics): in Walk (not a Stop, not the
 //! braking step), at least one impact after the last launch, the phase has not risen
 //! [`crate::safety::STALL_MIN_PROGRESS`] above its highest value of the step for
-//! `walk.stall_relaunch_s`, and the robot is nearly at rest on both feet: the swing foot
+//! `speed.stall_relaunch_s`, and the robot is nearly at rest on both feet: the swing foot
 //! within `walk.touchdown_height_m` of the stance foot's height and landed (not descending,
 //! as for a touchdown), the phase rate at most [`RELAUNCH_MAX_PHASE_RATE_PER_S`]. Then, once per
 //! step, the controller starts a launch of [`RELAUNCH_DURATION_S`] from the measured pose and
@@ -34,7 +34,8 @@
 //! both feet as a point-foot biped must after such a push, and walks on.
 //!
 //! On by default only in the treadmill config (`configs/runtime/adam_treadmill.toml`,
-//! `stall_relaunch_s = 1.0`); `adam.toml` keeps it off (0), so its runs, the replay fixtures and
+//! `[speed] stall_relaunch_s = 1.0`: a field of the speed section, the one section in which the
+//! treadmill config differs from `adam.toml`, `tests/configs.rs`; it acts without a library too); `adam.toml` keeps it off (0), so its runs, the replay fixtures and
 //! `tests/faults.rs`'s stall (a −10 N push that leaves the robot on one foot: no relaunch
 //! there anyway, it needs both feet down) are unchanged.
 //!

@@ -126,7 +126,7 @@ pub struct RunSummary {
     /// Belt steps only: steps to match the belt after the step up and after the step down
     /// ([`steps_to_match`]; `None` inside: never).
     pub steps_to_match: Option<[Option<usize>; 2]>,
-    /// Stalled steps the controller relaunched from double support (`walk.stall_relaunch_s`).
+    /// Stalled steps the controller relaunched from double support (`speed.stall_relaunch_s`).
     #[serde(default)]
     pub recoveries: u32,
 }

@@ -250,7 +250,7 @@ pub fn steps_to_match(steps: &[StepRecord], from_s: f64, until_s: f64) -> Option
 }
 
 /// No trip (a step timeout is a stall), no fall, still walking at the end. A step that
-/// stalled and was relaunched from double support (`walk.stall_relaunch_s`) rides through
+/// stalled and was relaunched from double support (`speed.stall_relaunch_s`) rides through
 /// here; [`outcome`] and the run's summary count the relaunches, so the tables say so.
 pub fn rides_through(r: &SimWalkReport) -> bool {
     r.fall.is_none()

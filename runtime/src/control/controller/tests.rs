@@ -561,7 +561,7 @@ fn a_repeated_imu_sample_is_integrated_once() {
 
 /// The stall relaunch (`control::recovery`) on the harness, whose torso never moves: a walk from
 /// the planned post-impact state (both feet down, as after an impact) that makes no progress
-/// relaunches once from double support after `walk.stall_relaunch_s`, hands over to the step
+/// relaunches once from double support after `speed.stall_relaunch_s`, hands over to the step
 /// within the relaunch, and, still held, trips the step timeout: the timeout stays the last
 /// resort. The first step after Walk from Stand never relaunches (no impact since its launch).
 #[test]
@@ -569,7 +569,7 @@ fn a_held_walk_relaunches_once_then_trips_the_step_timeout() {
     use crate::control::recovery::RELAUNCH_DURATION_S;
     let relaunch_s = 0.3;
     let mut h = Harness::with_config(PhaseSource::StateBased, |c| {
-        c.walk.stall_relaunch_s = relaunch_s;
+        c.speed.stall_relaunch_s = relaunch_s;
     });
     let limit_s = h.c.progress.limit_s();
     // Held rigidly: the legs stay in the gait's planned post-impact pose (both feet down),
@@ -619,7 +619,7 @@ fn a_held_walk_relaunches_once_then_trips_the_step_timeout() {
 
     // After Walk from Stand: held, no relaunch, the step timeout as without the relaunch.
     let mut h = Harness::with_config(PhaseSource::StateBased, |c| {
-        c.walk.stall_relaunch_s = relaunch_s;
+        c.speed.stall_relaunch_s = relaunch_s;
     });
     h.go_stand();
     h.step(Some(OperatorCommand::Walk));
