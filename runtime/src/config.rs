@@ -638,6 +638,13 @@ impl RuntimeConfig {
         non_negative("walk.impact_min_phase", w.impact_min_phase)?;
         non_negative("walk.reference_lead_s", w.reference_lead_s)?;
         positive("walk.stop_step_length_m", w.stop_step_length_m)?;
+        if self.speed.stall_relaunch_s >= self.safety.stall_timeout_s {
+            return Err(bad(
+                "speed.stall_relaunch_s",
+                self.speed.stall_relaunch_s.to_string(),
+                "must be shorter than safety.stall_timeout_s (the step timeout is the last resort)",
+            ));
+        }
         if w.reference_lead_s > 0.02 {
             return Err(bad(
                 "walk.reference_lead_s",

@@ -483,6 +483,11 @@ impl ProgressWatch {
         self.armed = false;
     }
 
+    /// The limit: no progress for longer than this trips, s.
+    pub fn limit_s(&self) -> f64 {
+        self.limit_s
+    }
+
     /// Whether the watch is armed.
     pub fn armed(&self) -> bool {
         self.armed

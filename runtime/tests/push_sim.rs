@@ -138,3 +138,47 @@ fn issue_pushes_ride_through_at_five_points_of_a_step() {
     assert_rides_through(-20.0);
     assert_rides_through(40.0);
 }
+
+/// The shipped treadmill config (`configs/runtime/adam_treadmill.toml`: the shipped gait library,
+/// speed control, the stall relaunch after 1 s) with the relaunch after `relaunch_s` (0: off).
+fn treadmill_setup(relaunch_s: f64) -> Setup {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let mut setup = Setup::load(
+        format!("{root}/configs/runtime/adam_treadmill.toml"),
+        format!("{root}/{}", runtime::DEFAULT_GAIT),
+    )
+    .expect("the treadmill config and its library load");
+    setup.config.speed.stall_relaunch_s = relaunch_s;
+    setup
+}
+
+/// The stall relaunch end to end (`runtime::control::recovery`; issue #29's push at 90 % of a
+/// step, its 0.2 s lasting into the next step, `runtime::sim::scenarios::push_at_phase`, seed 1,
+/// the run 9 s long): −20 N stops the torso short of the next stance foot. Without the relaunch
+/// the robot stands on both feet until the step timeout trips; with it, the controller
+/// relaunches once from double support and the walk goes on: no trip, no fall, and at least 6
+/// forward steps (simulator truth) in the last 5 s.
+#[test]
+fn a_backward_push_that_stalls_a_step_relaunches_from_double_support_and_walks_on() {
+    use runtime::sim::scenarios::{push_at_phase, PUSH_ARM_S};
+    let mut options = push_at_phase(-20.0, 0.9, 1);
+    options.duration_s = PUSH_ARM_S + 9.0;
+    let off = walk(&treadmill_setup(0.0), &options).expect("walk");
+    assert_eq!(
+        off.summary.trip.map(|t| t.name()),
+        Some("step_timeout"),
+        "{off}"
+    );
+    assert_eq!(off.summary.last_sample.recoveries, 0);
+    let on = walk(&treadmill_setup(1.0), &options).expect("walk");
+    println!("{on}");
+    assert!(on.summary.trip.is_none() && on.fall.is_none(), "{on}");
+    assert_eq!(on.summary.last_sample.recoveries, 1, "{on}");
+    let from_s = options.duration_s - 5.0;
+    let forward = on
+        .step_records
+        .iter()
+        .filter(|s| s.t_s > from_s && s.length_m > 0.1)
+        .count();
+    assert!(forward >= 6, "{forward} forward steps after {from_s} s");
+}

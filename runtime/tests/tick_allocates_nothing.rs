@@ -219,3 +219,50 @@ fn logging_the_ticks_can_frames_allocates_nothing() {
     assert_eq!(rows[1].id, 0x181);
     let _ = std::fs::remove_file(&path);
 }
+
+/// The stall relaunch (`speed.stall_relaunch_s`) allocates nothing either: a walk held rigidly in
+/// the gait's post-impact pose (both feet down, no progress) relaunches from double support
+/// inside the counted ticks, then hands over to the step.
+#[test]
+fn the_stall_relaunch_allocates_nothing() {
+    let mut setup = Setup::shipped().expect("shipped setup");
+    setup.config.speed.stall_relaunch_s = 0.3;
+    setup.config.safety.stall_timeout_s = 1e9;
+    let q0 = setup
+        .gait
+        .initial_state
+        .clone()
+        .expect("an initial state")
+        .q;
+    let pitch = q0[2];
+    let held: Vec<f64> = runtime::config::LEG_JOINT_NAMES
+        .iter()
+        .map(|name| {
+            let j = setup.model.require_joint(name).expect("a leg joint");
+            q0[setup.model.joints[j].coordinate]
+        })
+        .collect();
+    let mut c = setup.controller(false).expect("controller");
+    let mut input = TickInput::default();
+    for (m, &q) in input.motors.iter_mut().zip(&held) {
+        (m.fresh, m.temperature_c, m.q_rad) = (true, 30.0, q);
+    }
+    let mut out = TickOutput::default();
+    assert!(c.begin_walk_at_step_start(0.0, &mut out.status));
+    let ((), allocations) = counted(|| {
+        for k in 1..2000u32 {
+            input.t_s = f64::from(k) * 1e-3;
+            input.imu = Some(ImuSample {
+                t_s: input.t_s,
+                gyro_pitch_rad_s: runtime::backend::test_dither_rad_s(input.t_s),
+                accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
+                accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
+            });
+            c.tick(&input, &mut out);
+        }
+    });
+    assert_eq!(out.status.trip, None);
+    assert_eq!(out.status.state, ControlState::Walk);
+    assert_eq!(out.status.recoveries, 1, "the relaunch ran");
+    assert_eq!(allocations, 0, "Controller::tick allocated");
+}

@@ -25,7 +25,7 @@ pub(crate) const RUNTIME_CONFIG: &str = "configs/runtime/adam.toml";
 pub(crate) const CONFIG_DIR_ENV: &str = "ADAM_CONFIG_DIR";
 
 /// The files shipped in `configs/`, embedded: (path under `configs/`, contents).
-const EMBEDDED: [(&str, &str); 17] = [
+const EMBEDDED: [(&str, &str); 18] = [
     (
         "runtime/adam.toml",
         include_str!("../../configs/runtime/adam.toml"),

@@ -122,6 +122,14 @@ pub struct SpeedConfig {
     /// fast gaits.
     #[serde(default)]
     pub stop_library_mps: f64,
+    /// The stall relaunch, s (0, the default: off): a Walk step whose phase has made no
+    /// progress for this long, the robot nearly at rest on both feet (a backward push stopped
+    /// the torso short of the stance foot; on a moving belt it is then carried back), starts
+    /// again from double support, as Walk from Stand launches (`runtime::control::recovery`;
+    /// 1.0 in `configs/runtime/adam_treadmill.toml`). Once per step; shorter than
+    /// `safety.stall_timeout_s`, which stays the last resort. Acts with or without a library.
+    #[serde(default)]
+    pub stall_relaunch_s: f64,
 }
 
 /// Where the robot's position along the belt comes from.
@@ -159,6 +167,7 @@ impl Default for SpeedConfig {
             stop_ahead_m: 0.0,
             stop_approach_mps: 0.0,
             stop_library_mps: 0.0,
+            stall_relaunch_s: 0.0,
         }
     }
 }
@@ -200,6 +209,7 @@ impl SpeedConfig {
             ("speed.stop_ahead_m", self.stop_ahead_m),
             ("speed.stop_approach_mps", self.stop_approach_mps),
             ("speed.stop_library_mps", self.stop_library_mps),
+            ("speed.stall_relaunch_s", self.stall_relaunch_s),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {

@@ -16,6 +16,8 @@
 //! Stop: the step under way ends; one braking step (θ⁻ → θ_brake, outputs blended into its
 //!       landing pose); 5 ms after its touchdown, Stand holds the landed joint angles, the
 //!       landed pose's gravity torques fed forward
+//! Walk: no progress of τ for speed.stall_relaunch_s, at rest on both feet ──▶ relaunch from
+//!       double support (as Walk from Stand, 0.5 s; once per step; `recovery`)
 //! Walk/Stop: no progress of τ for safety.stall_timeout_s ──▶ Damping (Trip::StepTimeout)
 //!   ▼
 //! TickOutput { commands[14] (PD or damping, motor side), status }
@@ -62,11 +64,12 @@
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
 use super::orbit::OrbitLever;
+use super::recovery::{StallDetector, RELAUNCH, RELAUNCH_MAX_PHASE_RATE_PER_S};
 use super::speed::{SpeedLibrary, SpeedMap, SpeedRegulator, StepLever};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
-    braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, LAUNCH_DURATION_S,
-    MIN_JERK_PEAK_RATE, PLANNED_PITCH_SIGMA_RAD, STAND_DELAY_S, START_BLEND_SPAN,
+    braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, FROM_STAND, MIN_JERK_PEAK_RATE,
+    PLANNED_PITCH_SIGMA_RAD, STAND_DELAY_S, START_BLEND_SPAN,
 };
 use crate::config::{PhaseSource, RuntimeConfig, LEG_JOINT_NAMES};
 use crate::estimator::{EstimatorParams, PitchEstimator};
@@ -129,6 +132,10 @@ pub struct Controller {
     step_start_t_s: f64,
     /// The step timeout: trips [`Trip::StepTimeout`] when the walk's phase stops progressing.
     progress: ProgressWatch,
+    /// The stall relaunch's detector (`runtime::control::recovery`).
+    stall: StallDetector,
+    /// Relaunches after a stalled step since start-up.
+    recoveries: u32,
     touchdown_ticks: u32,
     /// (time, swing-foot height) at the previous walking tick.
     last_foot: Option<(f64, f64)>,
@@ -299,6 +306,8 @@ impl Controller {
             steps: 0,
             step_start_t_s: 0.0,
             progress: ProgressWatch::new(config.safety.stall_timeout_s),
+            stall: StallDetector::new(config.speed.stall_relaunch_s),
+            recoveries: 0,
             touchdown_ticks: 0,
             last_foot: None,
             phase_hat: None,
@@ -364,6 +373,8 @@ impl Controller {
         self.steps = 0;
         self.regulator.restart();
         self.step_lever.offset_m = 0.0;
+        // As after an impact: a stall of this first step may relaunch.
+        self.stall.restart(t_s, f64::NAN);
         self.enter(ControlState::Walk, status);
         true
     }
@@ -585,11 +596,9 @@ impl Controller {
             ControlState::Walk if self.launch_requested || self.launch.is_some() => {
                 if self.launch_requested {
                     self.launch_requested = false;
-                    self.begin_launch(t, &leg_q, &leg_dq);
+                    self.begin_launch(t, FROM_STAND, &leg_q, &leg_dq);
                 }
-                if self
-                    .launch
-                    .is_some_and(|l| t - l.start_t_s < LAUNCH_DURATION_S)
+                if self.launch.is_some_and(|l| t - l.start_t_s < l.duration_s)
                     && !self.launch_on_orbit(t, &leg_q, &leg_dq)
                 {
                     self.launch_commands(t, &leg_q, &leg_dq, &mut out.commands);
@@ -697,6 +706,22 @@ impl Controller {
                     self.phase_hat = Some((eval.phase, rate, t));
                     self.observe_phase(t, &mut eval);
                     self.progress.restart(t, eval.phase);
+                    self.stall.restart(t, eval.phase);
+                }
+                // A Walk step stalled, the robot nearly at rest on both feet (the swing foot
+                // landed at the stance foot's height): relaunch from double support
+                // (`recovery`); the launch's commands start with the next tick.
+                let at_rest_on_both_feet = eval.foot_height_m.abs() <= self.touchdown_height_m
+                    && landed
+                    && eval.phase_rate.abs() <= RELAUNCH_MAX_PHASE_RATE_PER_S;
+                if self.state == ControlState::Walk
+                    && !self.braking
+                    && self.stall.check(t, eval.phase, at_rest_on_both_feet)
+                {
+                    self.begin_launch(t, RELAUNCH, &leg_q, &leg_dq);
+                    if self.launch.is_some() {
+                        self.recoveries = self.recoveries.saturating_add(1);
+                    }
                 }
                 (y_des, dy_des) = (eval.y, eval.dy);
                 (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
@@ -722,6 +747,9 @@ impl Controller {
         }
         // The step timeout: a walk whose phase stopped progressing (held, stuck on both feet).
         let walking = matches!(self.state, ControlState::Walk | ControlState::Stop);
+        if self.state != ControlState::Walk || self.launch.is_some() {
+            self.stall.disarm();
+        }
         if !walking || self.launch.is_some() {
             self.progress.disarm();
         } else if !self.progress.armed() {
@@ -745,6 +773,7 @@ impl Controller {
             transition: status.transition,
             stance: self.stance,
             steps: self.steps,
+            recoveries: self.recoveries,
             phase,
             phase_rate_per_s: phase_rate,
             y_des_rad: y_des,

@@ -10,6 +10,7 @@
 //! | `speed` | treadmill speed control: the gait library by speed, interpolated at impact; the step-to-step regulator and the belt-position loop |
 //! | `transitions` | ramp, launch, start blend, braking step; minimum-jerk blends |
 //! | `orbit_table` | the planned orbit's stance-leg angular momentum σ*(θ) (zero dynamics), for the launch's hand-over |
+//! | `recovery` | the stall relaunch: a Walk step stalled on both feet launches again from double support |
 //! | `double_support` | kinematics with both feet down: torso pose, inverse kinematics |
 
 pub mod controller;
@@ -17,6 +18,7 @@ mod double_support;
 mod gait_table;
 mod orbit;
 mod orbit_table;
+mod recovery;
 mod speed;
 pub mod tick;
 mod transitions;

@@ -272,6 +272,9 @@ pub struct Status {
     pub stance: Side,
     /// Completed steps since Walk began.
     pub steps: u32,
+    /// Relaunches from double support after a stalled step since start-up
+    /// (`runtime::control::recovery`).
+    pub recoveries: u32,
     /// Phase τ (unclamped).
     pub phase: f64,
     /// τ̇, 1/s.
@@ -368,6 +371,7 @@ impl Default for TickOutput {
                 transition: None,
                 stance: Side::Left,
                 steps: 0,
+                recoveries: 0,
                 phase: 0.0,
                 phase_rate_per_s: 0.0,
                 y_des_rad: [0.0; OUTPUTS],

@@ -127,13 +127,35 @@ pub(super) const STAND_DELAY_S: f64 = 0.005;
 /// Peak of ds/du of [`min_jerk`].
 pub(super) const MIN_JERK_PEAK_RATE: f64 = 1.875;
 
+/// How a launch runs: the quintic's duration, the earliest hand-over onto the orbit, and
+/// whether it starts from the measured torso rate (a relaunch after a stall) or from rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct LaunchTiming {
+    pub(super) duration_s: f64,
+    pub(super) earliest_s: f64,
+    pub(super) from_motion: bool,
+}
+
+/// Walk from Stand: [`LAUNCH_DURATION_S`], [`LAUNCH_ORBIT_EARLIEST_S`], from rest.
+pub(super) const FROM_STAND: LaunchTiming = LaunchTiming {
+    duration_s: LAUNCH_DURATION_S,
+    earliest_s: LAUNCH_ORBIT_EARLIEST_S,
+    from_motion: false,
+};
+
 /// The start of a walk from Stand: both feet down, the torso carried forward over the stance
 /// foot (a quintic in time, joint targets by inverse kinematics, gravity fed forward), then the
 /// rear foot lifts.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Launch {
     pub(super) start_t_s: f64,
+    /// The quintic's duration, s ([`LAUNCH_DURATION_S`] from Stand; a relaunch is quicker).
+    pub(super) duration_s: f64,
+    /// The hand-over onto the orbit comes no sooner than this far into it, s.
+    pub(super) earliest_s: f64,
     pub(super) from: TorsoPose,
+    /// The torso's rate at the start (zero from Stand: at rest), m/s, m/s, rad/s.
+    pub(super) from_rate: TorsoPose,
     pub(super) to: TorsoPose,
     /// Forward torso speed at the launch's end, m/s.
     pub(super) speed_mps: f64,

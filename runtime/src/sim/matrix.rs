@@ -100,6 +100,7 @@ impl Run {
             max_abs_position_after_settle_m: max_abs_position_after_m(report, SETTLE_S),
             speed_ratio_after_settle: speed_ratio_after(&report.step_records, SETTLE_S),
             steps_to_match,
+            recoveries: report.summary.last_sample.recoveries,
         }
     }
 }
@@ -125,6 +126,9 @@ pub struct RunSummary {
     /// Belt steps only: steps to match the belt after the step up and after the step down
     /// ([`steps_to_match`]; `None` inside: never).
     pub steps_to_match: Option<[Option<usize>; 2]>,
+    /// Stalled steps the controller relaunched from double support (`speed.stall_relaunch_s`).
+    #[serde(default)]
+    pub recoveries: u32,
 }
 
 /// Walks `run` on the simulated robot of `setup` and summarizes it.

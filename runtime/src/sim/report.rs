@@ -271,6 +271,13 @@ impl std::fmt::Display for SimWalkReport {
             "safety trips: {trip} | falls: {fall} | repeated touchdowns {} | friction warnings {}",
             self.repeated_touchdowns, self.friction_exceeded
         )?;
+        if s.last_sample.recoveries > 0 {
+            writeln!(
+                f,
+                "stalled steps relaunched from double support: {}",
+                s.last_sample.recoveries
+            )?;
+        }
         write!(
             f,
             "tick compute time: median {:.1} µs, p99 {:.1} µs, max {:.1} µs | missing replies {} | bus errors {}",

@@ -27,6 +27,8 @@ pub struct StateSample {
     pub fresh_mask: u32,
     /// Completed steps.
     pub steps: u32,
+    /// Relaunches after a stalled step ([`crate::control::Status::recoveries`]).
+    pub recoveries: u32,
     /// Consecutive overruns.
     pub overrun_streak: u32,
     /// Total overruns.
@@ -87,6 +89,7 @@ impl Default for StateSample {
             trip_code: 0,
             fresh_mask: 0,
             steps: 0,
+            recoveries: 0,
             overrun_streak: 0,
             overruns: 0,
             tick_compute_ns: 0,
@@ -139,6 +142,7 @@ impl StateSample {
         };
         self.trip_code = s.trip.map_or(0, |t| t.code());
         self.steps = s.steps;
+        self.recoveries = s.recoveries;
         self.overrun_streak = input.overrun_streak;
         self.overruns = stats.overruns;
         self.tick_compute_ns = stats.tick_compute_ns;

@@ -8,9 +8,8 @@ use crate::control::gait_table::side_index;
 use crate::control::orbit_table::OrbitTable;
 use crate::control::tick::{CommandMode, JointCommand};
 use crate::control::transitions::{
-    Launch, LAUNCH_BEHIND_M, LAUNCH_DURATION_S, LAUNCH_MAX_DROP_M, LAUNCH_ORBIT_EARLIEST_S,
-    LAUNCH_PASS_MARGIN, LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP, LAUNCH_REACH_FRACTION,
-    LAUNCH_SPEED_MPS,
+    Launch, LaunchTiming, LAUNCH_BEHIND_M, LAUNCH_MAX_DROP_M, LAUNCH_PASS_MARGIN,
+    LAUNCH_POSE_KI_PER_S, LAUNCH_POSE_KP, LAUNCH_REACH_FRACTION, LAUNCH_SPEED_MPS,
 };
 use crate::estimator::GRAVITY_MPS2;
 use crate::slots::{LEG_SLOTS, OUTPUTS, SLOTS};
@@ -94,10 +93,14 @@ impl Controller {
     /// arrives at the planned orbit's angular momentum about the stance foot (`orbit_table`) and
     /// hands over as soon as the measured momentum reaches it ([`Self::launch_on_orbit`]); after
     /// a Stop at [`LAUNCH_SPEED_MPS`] (more if it ends further back: enough to pass over the
-    /// stance foot, [`LAUNCH_PASS_MARGIN`]), handing over at the end.
+    /// stance foot, [`LAUNCH_PASS_MARGIN`]), handing over at the end. `timing`: the quintic's
+    /// duration, the earliest hand-over onto the orbit and whether the torso starts at rest
+    /// (from Stand: `FROM_STAND`; a relaunch after a stall is quicker and starts from the
+    /// measured torso rate, `recovery`).
     pub(super) fn begin_launch(
         &mut self,
         t_s: f64,
+        timing: LaunchTiming,
         leg_q: &[f64; LEG_SLOTS],
         leg_dq: &[f64; LEG_SLOTS],
     ) {
@@ -139,7 +142,10 @@ impl Controller {
                 .unwrap_or(LAUNCH_SPEED_MPS.max(pass_mps));
             Launch {
                 start_t_s: t_s,
+                duration_s: timing.duration_s,
+                earliest_s: timing.earliest_s,
                 from: m.pose,
+                from_rate: if timing.from_motion { m.rate } else { [0.0; 3] },
                 to,
                 orbit,
                 speed_mps,
@@ -172,7 +178,8 @@ impl Controller {
 
     /// Whether the launch has reached the planned orbit: the measured angular momentum about
     /// the stance foot at least σ*(θ) at the measured stance-leg angle (`orbit_table`), once
-    /// [`LAUNCH_ORBIT_EARLIEST_S`] of it have passed. Always false without a table.
+    /// its earliest hand-over time (`LAUNCH_ORBIT_EARLIEST_S` from Stand) has passed. Always
+    /// false without a table.
     pub(super) fn launch_on_orbit(
         &self,
         t_s: f64,
@@ -185,7 +192,7 @@ impl Controller {
         let Some(table) = launch.orbit else {
             return false;
         };
-        if t_s - launch.start_t_s < LAUNCH_ORBIT_EARLIEST_S {
+        if t_s - launch.start_t_s < launch.earliest_s {
             return false;
         }
         let g = self.geometry();
@@ -221,10 +228,10 @@ impl Controller {
         for k in 0..3 {
             (pose[k], rate[k]) = double_support::quintic(
                 launch.from[k],
-                0.0,
+                launch.from_rate[k],
                 launch.to[k],
                 end_rate[k],
-                LAUNCH_DURATION_S,
+                launch.duration_s,
                 dt,
             );
         }

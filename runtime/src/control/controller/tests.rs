@@ -4,7 +4,7 @@
 
 use super::*;
 use crate::config::LEG_JOINT_NAMES;
-use crate::control::transitions::BRAKE_BLEND_FROM;
+use crate::control::transitions::{BRAKE_BLEND_FROM, LAUNCH_DURATION_S};
 use crate::control::CommandMode;
 use crate::estimator::GRAVITY_MPS2;
 use crate::Setup;
@@ -25,7 +25,13 @@ struct Harness {
 
 impl Harness {
     fn new(phase: PhaseSource) -> Self {
+        Self::with_config(phase, |_| {})
+    }
+
+    /// [`Harness::new`] with the shipped config changed by `tweak` first.
+    fn with_config(phase: PhaseSource, tweak: impl Fn(&mut crate::config::RuntimeConfig)) -> Self {
         let mut setup = Setup::shipped().unwrap();
+        tweak(&mut setup.config);
         setup.config.walk.phase = phase;
         // These tests check the gait's own outputs on a kinematic harness (the torso's pitch is
         // the IMU's, not the hips'); the orbit lever has its own tests (`control::orbit`).
@@ -475,7 +481,7 @@ fn walk_pitching(
     let mut h = Harness::new(PhaseSource::StateBased);
     h.go_stand();
     h.step(Some(OperatorCommand::Walk));
-    h.run(crate::control::transitions::LAUNCH_DURATION_S + 0.01);
+    h.run(LAUNCH_DURATION_S + 0.01);
     let t0 = h.input.t_s;
     let steps0 = h.out.status.steps;
     for _ in 0..(seconds / h.dt_s).round() as usize {
@@ -551,4 +557,74 @@ fn a_repeated_imu_sample_is_integrated_once() {
     assert_eq!(a.pitch_rad().to_bits(), b.pitch_rad().to_bits());
     assert_eq!(a.gyro_bias_rad_s().to_bits(), b.gyro_bias_rad_s().to_bits());
     assert_eq!(a.pitch_sigma_rad().to_bits(), b.pitch_sigma_rad().to_bits());
+}
+
+/// The stall relaunch (`control::recovery`) on the harness, whose torso never moves: a walk from
+/// the planned post-impact state (both feet down, as after an impact) that makes no progress
+/// relaunches once from double support after `speed.stall_relaunch_s`, hands over to the step
+/// within the relaunch, and, still held, trips the step timeout: the timeout stays the last
+/// resort. The first step after Walk from Stand never relaunches (no impact since its launch).
+#[test]
+fn a_held_walk_relaunches_once_then_trips_the_step_timeout() {
+    use crate::control::recovery::RELAUNCH_DURATION_S;
+    let relaunch_s = 0.3;
+    let mut h = Harness::with_config(PhaseSource::StateBased, |c| {
+        c.speed.stall_relaunch_s = relaunch_s;
+    });
+    let limit_s = h.c.progress.limit_s();
+    // Held rigidly: the legs stay in the gait's planned post-impact pose (both feet down),
+    // whatever the commands.
+    let q0 = Setup::shipped().unwrap().gait.initial_state.unwrap().q;
+    let held: [f64; LEG_SLOTS] = std::array::from_fn(|k| q0[h.c.leg_coord[k]]);
+    let hold = |h: &mut Harness| {
+        for (m, q) in h.input.motors.iter_mut().zip(held) {
+            (m.q_rad, m.dq_rad_s) = (q, 0.0);
+        }
+    };
+    h.step_with(None, hold);
+    let mut status = h.out.status;
+    assert!(h.c.begin_walk_at_step_start(h.input.t_s, &mut status));
+    let t0 = h.input.t_s;
+    let (mut relaunched_at, mut handed_over_at, mut trip_at) = (None, None, None);
+    for _ in 0..6000 {
+        let s = h.step_with(None, hold);
+        let t = h.input.t_s - t0;
+        if s.recoveries == 1 && relaunched_at.is_none() {
+            relaunched_at = Some(t);
+            assert!(h.c.launch.is_some(), "the relaunch starts a launch");
+        }
+        if relaunched_at.is_some() && handed_over_at.is_none() && h.c.launch.is_none() {
+            handed_over_at = Some(t);
+        }
+        if s.state == ControlState::Damping {
+            trip_at = Some((t, s.trip.unwrap()));
+            break;
+        }
+    }
+    let relaunched_at = relaunched_at.expect("a relaunch");
+    assert!(
+        relaunched_at > relaunch_s && relaunched_at < relaunch_s + 0.05,
+        "{relaunched_at}"
+    );
+    let handed_over_at = handed_over_at.expect("a hand-over");
+    assert!(
+        handed_over_at - relaunched_at <= RELAUNCH_DURATION_S + 0.002,
+        "{relaunched_at} {handed_over_at}"
+    );
+    let (t, trip) = trip_at.expect("the step timeout trips");
+    assert_eq!(trip.name(), "step_timeout", "{trip}");
+    assert!(t > handed_over_at + limit_s, "{t} {handed_over_at}");
+    assert_eq!(h.out.status.recoveries, 1);
+    assert_eq!(h.out.status.steps, 0);
+
+    // After Walk from Stand: held, no relaunch, the step timeout as without the relaunch.
+    let mut h = Harness::with_config(PhaseSource::StateBased, |c| {
+        c.speed.stall_relaunch_s = relaunch_s;
+    });
+    h.go_stand();
+    h.step(Some(OperatorCommand::Walk));
+    let s = h.run(LAUNCH_DURATION_S + limit_s + 0.2);
+    assert_eq!(s.state, ControlState::Damping);
+    assert_eq!(s.trip.map(|t| t.name()), Some("step_timeout"));
+    assert_eq!(s.recoveries, 0);
 }

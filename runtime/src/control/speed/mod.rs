@@ -332,7 +332,10 @@
 //! to 0.64 m). The position swings with the slow creep of the walked speed ("The walked-speed
 //! calibration"). Backward pushes of −20 N at 10, 30 and 90 % of the step stall the step
 //! under way (0 of 5; 5 of 5 at 50 and 70 %), which no per-step lever reaches: it acts at
-//! the next impact. +40 N rides through at every point but one seed at 10 %.
+//! the next impact. +40 N rides through at every point but one seed at 10 %. The stall
+//! relaunch (`runtime::control::recovery`) restarts such a stall from double support: within
+//! the scenario's 4 s watch both then ride through 5 of 5 at every point, but not over 12 s
+//! (its module docs).
 //!
 //! Before the calibration (the same gains): walked/belt 103.4 / 100.7 / 99.4 / 99.8 /
 //! 100.1 %, −20 N 3 of 5 at 50 %, +40 N 4 of 5 at 90 %, the largest pushes ridden through at
