@@ -638,13 +638,6 @@ impl RuntimeConfig {
         non_negative("walk.impact_min_phase", w.impact_min_phase)?;
         non_negative("walk.reference_lead_s", w.reference_lead_s)?;
         positive("walk.stop_step_length_m", w.stop_step_length_m)?;
-        if self.speed.stall_relaunch_s >= self.safety.stall_timeout_s {
-            return Err(bad(
-                "speed.stall_relaunch_s",
-                self.speed.stall_relaunch_s.to_string(),
-                "must be shorter than safety.stall_timeout_s (the step timeout is the last resort)",
-            ));
-        }
         if w.reference_lead_s > 0.02 {
             return Err(bad(
                 "walk.reference_lead_s",
@@ -718,6 +711,14 @@ impl RuntimeConfig {
         positive("safety.max_imu_age_s", s.max_imu_age_s)?;
         positive("safety.max_gyro_rad_s", s.max_gyro_rad_s)?;
         positive("safety.stall_timeout_s", s.stall_timeout_s)?;
+        // The stall relaunch (0: off) must come before the step timeout, the last resort.
+        if self.speed.stall_relaunch_s > 0.0 && self.speed.stall_relaunch_s >= s.stall_timeout_s {
+            return Err(bad(
+                "speed.stall_relaunch_s",
+                self.speed.stall_relaunch_s.to_string(),
+                "must be shorter than safety.stall_timeout_s (the step timeout is the last resort)",
+            ));
+        }
         if s.torque_saturation_ticks == 0 {
             return Err(bad(
                 "safety.torque_saturation_ticks",

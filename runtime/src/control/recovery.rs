@@ -65,8 +65,8 @@
 //! Walk (`Restart::BeltAfterWalk`) 1 of 5 (ok after a relaunch; the others trip: step timeout
 //! ×2, torque saturation, implausible IMU), before 0 of 5 (step timeout ×5).
 //!
-//! These are `adam bench treadmill`'s runs, which watch 4 s after the push is armed. Continued to
-//! 12 s (seeds 1–5): −20 N 3, 0, 5, 5, 5 of 5 with the relaunch, 0, 0, 5, 5, 0 without (at 10 and
+//! These were `adam bench treadmill`'s runs when it watched 4 s after the push armed; it now
+//! watches 9 s (to 12 s), and prints the 12 s figures (seeds 1–5): −20 N 3, 0, 5, 5, 5 of 5 with the relaunch, 0, 0, 5, 5, 0 without (at 10 and
 //! 30 % the relaunched walk stalls again, a second relaunch, then off the back of the belt, the
 //! belt having carried the robot back ~0.35 m during the stall, or a joint limit); +40 N 0 of 5
 //! at every point with or without it (step timeouts, falls, torque saturations); every run
