@@ -530,9 +530,11 @@ impl Controller {
                 .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
         }
         // Operator, then safety (a trip overrides any request).
-        self.regulator.walking = self.state == ControlState::Walk;
         if let Some(cmd) = input.operator {
-            if !self.regulator.operator(cmd) {
+            if !self
+                .regulator
+                .operator(cmd, self.state == ControlState::Walk)
+            {
                 self.handle_operator(cmd, t, status);
             }
         }
@@ -674,11 +676,10 @@ impl Controller {
                     self.steps = self.steps.saturating_add(1);
                     // Stop: the step under way ends, then the braking step, then Stand (with
                     // speed control, the Stop's approach and slowing steps first).
+                    // (`stopping` only after `begin_stop`, which needs a library and a belt.)
                     let approach = self.state == ControlState::Stop
                         && !self.braking
                         && self.stop_touchdown_t_s.is_none()
-                        && self.library.is_some()
-                        && self.regulator.active()
                         && self.regulator.stopping();
                     if self.state == ControlState::Stop && !approach {
                         if self.braking {

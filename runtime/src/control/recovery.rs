@@ -114,8 +114,7 @@ pub(super) const RELAUNCH: LaunchTiming = LaunchTiming {
 /// Watches a Walk step for a stall on both feet; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct StallDetector {
-    /// No progress for this long is a stall, s (0: never relaunch).
-    after_s: f64,
+    /// No progress for its limit is a stall (a limit of 0: never relaunch).
     watch: ProgressWatch,
 }
 
@@ -123,14 +122,13 @@ impl StallDetector {
     /// A disarmed detector relaunching after `after_s` without progress (0: off).
     pub(super) fn new(after_s: f64) -> Self {
         Self {
-            after_s,
             watch: ProgressWatch::new(after_s),
         }
     }
 
     /// An impact started a step at `phase`: a relaunch may follow in it.
     pub(super) fn restart(&mut self, t_s: f64, phase: f64) {
-        if self.after_s > 0.0 {
+        if self.watch.limit_s() > 0.0 {
             self.watch.restart(t_s, phase);
         }
     }

@@ -56,8 +56,6 @@ pub(in crate::control) struct SpeedRegulator {
     reference_m: f64,
     /// Impacts left during which the reference follows the estimate (after the belt started).
     settle_left: u32,
-    /// The controller walks (the belt starting while it walks starts the settling).
-    pub(in crate::control) walking: bool,
     /// A Stop under way with speed control: its approach and slowing steps.
     stop: Option<StopPhase>,
 }
@@ -135,7 +133,6 @@ impl SpeedRegulator {
             steps_since_walk: 0,
             reference_m: 0.0,
             settle_left: 0,
-            walking: false,
             stop: None,
         }
     }
@@ -188,13 +185,15 @@ impl SpeedRegulator {
         self.status.belt_mps.is_finite()
     }
 
-    /// Takes an operator's speed command; false for any other command.
-    pub(in crate::control) fn operator(&mut self, cmd: OperatorCommand) -> bool {
+    /// Takes an operator's speed command; false for any other command. `walking`: the
+    /// controller is in Walk (a belt started from rest under the walking robot starts the
+    /// settling).
+    pub(in crate::control) fn operator(&mut self, cmd: OperatorCommand, walking: bool) -> bool {
         let s = &mut self.status;
         match cmd {
             OperatorCommand::Belt { speed_mps } if speed_mps.is_finite() => {
                 // The belt started (from rest) under the walking robot.
-                if self.walking && s.belt_mps == 0.0 && speed_mps != 0.0 {
+                if walking && s.belt_mps == 0.0 && speed_mps != 0.0 {
                     self.settle_left = self.start.belt_start_settle_steps;
                 }
                 s.belt_mps = speed_mps;
@@ -419,7 +418,7 @@ mod tests {
 
     fn regulator(config: &SpeedConfig) -> SpeedRegulator {
         let mut r = SpeedRegulator::new(config, 0.25);
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }, false));
         r
     }
 
@@ -602,7 +601,7 @@ mod tests {
         assert_eq!(r.status.commanded_mps, 0.25);
         assert!((sigma - 0.25 / 1.2).abs() < 1e-12, "σ = {sigma}");
         // A belt faster than the fastest gait walks (0.42 m/s): the command stops there.
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.5 }));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.5 }, false));
         r.on_impact_mapped(0.2, 0.8, (0.15, 0.35), &Fast);
         assert!(r.status.clamped);
         assert!((r.status.commanded_mps - 0.42).abs() < 1e-12);
@@ -627,7 +626,7 @@ mod tests {
     fn a_walk_from_stand_keeps_the_belt_travel_and_its_first_impact_jumps_to_the_command() {
         let mut r = SpeedRegulator::new(&start_config(), 0.15);
         r.at_start();
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }, false));
         // Standing 1 s on the belt: 0.25 m back, kept at Walk.
         for k in 0..=1000 {
             r.advance(f64::from(k) * 1e-3);
@@ -663,9 +662,8 @@ mod tests {
     #[test]
     fn the_belt_started_under_the_walking_robot_is_ridden_out_then_the_reference_glides_back() {
         let mut r = SpeedRegulator::new(&start_config(), 0.15);
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.0 }));
-        r.walking = true;
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.0 }, true));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.25 }, true));
         // A shoved step 0.2 m ahead: the command stays the belt's, no longer step.
         r.on_impact(0.2, 0.5, (0.15, 0.40));
         assert_eq!(r.status.requested_mps, 0.25);
@@ -677,7 +675,7 @@ mod tests {
         r.on_impact(0.125, 0.5, (0.15, 0.40));
         assert!(r.status.requested_mps < 0.25 && r.status.requested_mps > 0.24);
         // A belt that changes speed while moving does not start it again.
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.30 }));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.30 }, true));
         assert_eq!(r.settle_left, 0);
     }
 
@@ -716,7 +714,7 @@ mod tests {
             ..SpeedConfig::default()
         };
         let mut r = regulator(&config);
-        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.5 }));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.5 }, false));
         let sigma = r.on_impact(0.2, 0.8, (0.15, 0.35));
         assert!(r.status.clamped);
         let k_p = config.position_gain_per_s;
@@ -724,9 +722,9 @@ mod tests {
         assert_eq!(r.status.commanded_mps, 0.35);
         // ... and the library speed moves towards it by at most the step limit.
         assert!((sigma - 0.27).abs() < 1e-12, "σ = {sigma}");
-        assert!(!r.operator(OperatorCommand::Walk));
-        assert!(r.operator(OperatorCommand::Nudge { delta_mps: 0.025 }));
-        assert!(r.operator(OperatorCommand::Nudge { delta_mps: 0.025 }));
+        assert!(!r.operator(OperatorCommand::Walk, false));
+        assert!(r.operator(OperatorCommand::Nudge { delta_mps: 0.025 }, false));
+        assert!(r.operator(OperatorCommand::Nudge { delta_mps: 0.025 }, false));
         assert!((r.status.offset_mps - 0.05).abs() < 1e-15);
     }
 }
