@@ -271,4 +271,21 @@ impl Setup {
         }
         self
     }
+
+    /// This setup starting on a belt at rest (unchanged without a library): from the library
+    /// gait whose step is nearest the runtime gait's, so that the robot stands in the runtime
+    /// gait's stance. (Nearest the belt's speed, 0, would be the slowest gait, whose shorter
+    /// step a library reaching below 0.15 m/s makes a narrower stance to launch from.)
+    pub fn starting_at_rest(mut self) -> Self {
+        let step_m = self.gait.step_length_m;
+        let nearest = self.library.iter().min_by(|a, b| {
+            (a.step_length_m - step_m)
+                .abs()
+                .total_cmp(&(b.step_length_m - step_m).abs())
+        });
+        if let Some(g) = nearest {
+            self.gait = g.clone();
+        }
+        self
+    }
 }

@@ -35,6 +35,14 @@
 //! controller ramped to Stand by a Start at `t = 0` and walked by the
 //! [`SimWalkOptions::script`] (the controller's launch; see `runtime/tests/stand_sim.rs`: its
 //! first steps are quicker and converge to the orbit over some 20 steps).
+//!
+//! With a gait library (speed control) the run starts on the library gait nearest the belt's
+//! first speed ([`crate::Setup::starting_near`]); on a belt at rest, on the library gait whose
+//! step is nearest the runtime gait's ([`crate::Setup::starting_at_rest`]): the slowest gait
+//! of the library down to 0.125 m/s stands on a 0.125 m stance, and from it Stop → Stand →
+//! Walk on the 1.6 m belt went off its back in 5 of 5 (`adam bench treadmill --config
+//! configs/runtime/adam_treadmill.toml`, table (d)); the 0.15 m stance is the one the
+//! 0.15–0.40 m/s library stood on, its runs unchanged figure for figure.
 
 use crate::backend::Backend;
 use crate::control::OperatorCommand;
@@ -248,7 +256,8 @@ pub fn walk_with_operator(
     options: &SimWalkOptions,
     operator: Option<crate::operator::OperatorReceiver>,
 ) -> Result<SimWalkReport> {
-    // With speed control, start on the library gait nearest the belt's first speed.
+    // With speed control, start on the library gait nearest the belt's first speed; on a belt
+    // at rest, on the one whose step is nearest the runtime gait's (its stance).
     let first_belt_mps = match &options.belt_profile {
         Some(profile) => Some(profile.initial_speed_mps()),
         None => options.belt_speed_mps,
@@ -256,7 +265,11 @@ pub fn walk_with_operator(
     let near;
     let setup = match first_belt_mps {
         Some(v) if !setup.library.is_empty() => {
-            near = setup.clone().starting_near(v);
+            near = if v > 0.0 {
+                setup.clone().starting_near(v)
+            } else {
+                setup.clone().starting_at_rest()
+            };
             &near
         }
         _ => setup,

@@ -30,7 +30,9 @@
 //! Now the launch aims at the gait halfway to the belt's and the first impact jumps to the
 //! command's gait: the first impact comes at 4.97 s, 0.52 m behind (seed 1), the walk gets
 //! back to the centre by 10 s, and after 10 s |position| ≤ 0.14 m but 0.34 m (seed 4); the
-//! deepest point 0.53–0.61 m behind.
+//! deepest point 0.53–0.61 m behind. (With the library down to 0.125 m/s the launch aims 0.4
+//! of the way, and the robot stands in the library gait of the runtime gait's step, 0.15 m,
+//! not the slowest gait's 0.125 m: `runtime::sim::run`, `runtime::control::speed`.)
 //!
 //! **Stop → Stand → Walk again: the timing.** The issue does not fix the times; the first
 //! scenario (Stop at 8 s, Walk at 11 s) cannot be met on the 1.6 m belt whatever the controller
@@ -64,7 +66,7 @@
 //! - the first impact unlimited alone: FromStand 4 of 5 (seed 3 off the back at 6.3 s: its
 //!   first step took 1.33 s), BeltAfterWalk 3 of 5; with the launch aiming at the command's own
 //!   gait (`launch_gait_fraction = 1`): 5 of 5 but the rear foot chattered in the launch (some
-//!   40 repeated touchdowns at seed 1), so halfway;
+//!   40 repeated touchdowns at seed 1), so halfway (0.4 since the library reaches 0.125 m/s);
 //! - without `position_from_start` (the position from each Walk): after 10 s the walk keeps
 //!   0.12–0.49 m behind the centre (the belt's travel while standing is lost); with it and no
 //!   integral delay: 0.17–0.35 m ahead (the first steps after the launch wind the integral up);

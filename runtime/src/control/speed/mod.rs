@@ -72,10 +72,15 @@
 //! A robot standing on a belt at b is carried back b metres a second (0.25 m/s: the 1.6 m
 //! belt's back end is some 2.6 s away from its centre), so a walk from Stand must get up to the
 //! belt's speed at once, and a Stop must not leave the robot where it cannot stand:
-//! - **Walk from Stand** (`launch_gait_fraction` 0.5, `first_step_unlimited`): the launch and
-//!   the first step walk the library gait halfway from the gait Stand stood in to the one that
-//!   walks the belt's speed (the launch aims at its orbit, `orbit_table`), and the first impact
-//!   sets σ for the command without the 0.02 m/s-per-step limit (then limited again);
+//! - **Walk from Stand** (`launch_gait_fraction` 0.4, `first_step_unlimited`): the launch and
+//!   the first step walk the library gait 0.4 of the way from the gait Stand stood in to the
+//!   one that walks the belt's speed (the launch aims at its orbit, `orbit_table`), and the
+//!   first impact sets σ for the command without the 0.02 m/s-per-step limit (then limited
+//!   again). Halfway (0.5) until the library went down to 0.125 m/s; with it, table (d) of
+//!   `adam bench treadmill` over seeds 1–10 (30 runs each): 0.3 → 4 off the back of the belt
+//!   (seeds 2, 3), 0.35 and 0.4 → none, 0.45 → 4 step timeouts in the launch (seeds 2, 3), 0.5
+//!   → 2 (seed 6), 0.6 → 4. The same timeout at seed 6 with 0.5 comes with the old library
+//!   re-planned (gaits moved by 2e-6 s): the launch is that sensitive;
 //! - **the position** (`position_from_start`) counts from Start, when the robot stands at the
 //!   centre: the belt's travel while standing is part of it (a real robot's odometry does the
 //!   same with the operator's belt speed), and the regulator's integral rests for the first
@@ -110,11 +115,17 @@
 //! it used to build over tens of steps while the position swung.
 //!
 //! **Identification** (`cargo run --release -p runtime --example treadmill_probe -- CONFIG v
-//! 0.025 SEED`: speed control with every gain at 0, so σ is the belt speed v, on an
-//! endless belt at v; the operator's offset steps σ by +0.025 m/s at 30 s; seeds 1–3). The
-//! mean walked speed over 20–30 s at σ = 0.15, 0.175, …, 0.375 m/s: 0.154 (seed 1 stalled at
-//! 0.15 m/s), 0.184, 0.225, 0.284, 0.311, 0.332, 0.350, 0.390, 0.405, 0.416; at 0.40 m/s
-//! (after the step from 0.375) 0.429: the treadmill config's `walked_mps`. The map is steep
+//! 0.025 SEED`: speed control with every gain at 0 — `position_gain_per_step` and
+//! `position_gain_per_s` both, the first 0 hands over to the second — and no `walked_mps`, so
+//! σ is the belt speed v, on an endless belt at v; the operator's offset steps σ by
+//! +0.025 m/s at 30 s; seeds 1–3). The mean walked speed over 20–30 s (Σ length / Σ duration)
+//! of the library down to 0.125 m/s (2026-12-05) at σ = 0.125, 0.15, …, 0.375 m/s: 0.130
+//! (seed 1 stalled), 0.153 (seeds 1 and 2 tripped a joint limit), 0.186, 0.223, 0.290, 0.310,
+//! 0.331, 0.350, 0.392, 0.405, 0.416; at 0.40 m/s (over 40–60 s, after the step from 0.375)
+//! 0.429: the treadmill config's `walked_mps`. The 0.15–0.40 m/s library before it gave
+//! 0.154, 0.184, 0.225, 0.284, 0.311, 0.332, 0.350, 0.390, 0.405, 0.416, 0.429 (re-run the
+//! same way: 0.154, 0.183, 0.225, 0.284, 0.311 at 0.15–0.25 m/s; the seeds scatter by up to
+//! ±0.02 m/s at 0.20–0.225 m/s). The map is steep
 //! between 0.20 and 0.225 (slope 2.4: a 0.25 m/s belt needs σ ≈ 0.211), and the slow gaits
 //! are not stationary: the 0.175 and 0.20 m/s gaits creep up by 0.01–0.04 m/s over 20 s
 //! (0.20: 0.199 → 0.237 m/s, seed 1). After a step in σ the stride speed (two steps)
@@ -321,8 +332,29 @@
 //!   belt: not kept.
 //!
 //! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
-//! With the walked-speed calibration: 0.15–0.35 m/s: no fall, no trip (none in seeds 6–10
-//! either); walked/belt 104.9 / 101.9 / 100.9 / 100.8 / 100.6 % after 10 s (the 0.15 m/s
+//! **With the library down to 0.125 m/s** (docs/gait-library.md, "Step bounds"; its
+//! calibration above; `launch_gait_fraction` 0.4): 0.15–0.35 m/s: no fall, no trip (none in
+//! seeds 6–10 either); walked/belt 101.2 / 101.9 / 101.1 / 100.8 / 100.6 % after 10 s (seeds
+//! 6–10: 101.1 / 101.1 / 100.0 / 100.5 / 100.5 %), within the 2 % at every speed:
+//! the 0.125 m/s gait walks 0.130 m/s, so on a 0.15 m/s belt the command has room below the
+//! belt; max |position| after 10 s 0.124 / 0.170 / 0.262 / 0.123 / 0.111 m (seeds 6–10:
+//! 0.122 / 0.307 / 0.298 / 0.131 / 0.109 m; asked: 0.10 m). The belt step rides through in
+//! 10 of 10 but matches more slowly: up 10, 11, 2, 3, 10 and down 9, 1, 8, 1, 17 steps
+//! (seeds 6–10: 1, 2, 14, 9, 16 and 12, 1, 10, 16, 1), within 8 both ways in 3 of 10
+//! (before: 8 of 10), |position| up to 0.44 m (seeds 6–10: 0.55 m). Pushes: −20 N 2, 0, 4, 5,
+//! 5 and 2, 1, 5, 5, 5 of 5 (seeds 1–5, 6–10; before 3, 0, 5, 5, 5 and 2, 0, 4, 5, 5), +40 N
+//! 0 of 50 (before 1), bisection 2–5 N backward (as before), 5–10 N forward (before 8–10 N).
+//! Table (d) 5 of 5 in each case, seeds 1–10. How much of the change is the 0.125 m/s gait:
+//! the old library re-planned with the new step bound (its gaits moved by at most 2e-6 s),
+//! without that gait and with the old calibration, seeds 1–5: 0.383 / 0.388 / 0.296 / 0.132 /
+//! 0.106 m, 105.5 % at 0.15 m/s, the belt step never matched going down in seed 5, −20 N 2, 1,
+//! 4, 5, 5: the belt step and the pushes move as much with gaits 2e-6 s apart (the runs are
+//! that sensitive), the 0.15 m/s belt only with the slower gait. The new gait with the old
+//! calibration (0.130 added): 0.185 / 0.348 / 0.353 / 0.132 / 0.106 m, the belt step within
+//! 8 steps in 5 of 5: not kept (0.20 and 0.25 m/s worse than today).
+//!
+//! **Before it** (the 0.15–0.40 m/s library) with the walked-speed calibration: 0.15–0.35 m/s:
+//! no fall, no trip (none in seeds 6–10 either); walked/belt 104.9 / 101.9 / 100.9 / 100.8 / 100.6 % after 10 s (the 0.15 m/s
 //! belt is slower than the slowest gait walks, 0.154 m/s: the robot stays ahead of the
 //! centre); max |position| after 10 s 0.376 / 0.187 / 0.310 / 0.132 / 0.106 m (asked:
 //! 0.10 m; before the calibration 0.265 / 0.191 / 0.260 / 0.132 / 0.112 m and 103.4 / 100.7 /
