@@ -110,6 +110,12 @@ pub struct SpeedConfig {
     /// Then the reference glides back to the centre at this speed, m/s (0: it jumps back).
     #[serde(default)]
     pub reference_glide_mps: f64,
+    /// The belt-change feed-forward, m/s (0, the default: off): when the operator speeds up a
+    /// moving belt by more than this while the robot walks, the next impact sets the
+    /// library speed for the new belt without `max_change_per_step_mps` (as
+    /// `first_step_unlimited` after a Walk from Stand) and the integral starts again from 0.
+    #[serde(default)]
+    pub belt_change_unlimited_mps: f64,
     /// A Stop on a moving belt first walks to this far ahead of the centre, m (0, the default:
     /// it brakes at once): the robot then stands longer before the belt carries it off the back.
     #[serde(default)]
@@ -164,6 +170,7 @@ impl Default for SpeedConfig {
             integral_delay_steps: 0,
             belt_start_settle_steps: 0,
             reference_glide_mps: 0.0,
+            belt_change_unlimited_mps: 0.0,
             stop_ahead_m: 0.0,
             stop_approach_mps: 0.0,
             stop_library_mps: 0.0,
@@ -206,6 +213,10 @@ impl SpeedConfig {
             ("speed.below_library_mps", self.below_library_mps),
             ("speed.launch_gait_fraction", self.launch_gait_fraction),
             ("speed.reference_glide_mps", self.reference_glide_mps),
+            (
+                "speed.belt_change_unlimited_mps",
+                self.belt_change_unlimited_mps,
+            ),
             ("speed.stop_ahead_m", self.stop_ahead_m),
             ("speed.stop_approach_mps", self.stop_approach_mps),
             ("speed.stop_library_mps", self.stop_library_mps),

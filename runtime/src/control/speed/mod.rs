@@ -91,6 +91,18 @@
 //!   0.4–0.5 m/s); for 6 impacts the command is the belt's speed (the position loop's reference
 //!   follows the estimate) and the step lever rests, then the reference glides back to the
 //!   centre at 0.02 m/s. A belt that changes speed while moving is not affected;
+//! - **the belt sped up under the walking robot** (`belt_change_unlimited_mps` 0.05, the
+//!   belt-change feed-forward): the operator's belt speed is known, so when a moving belt
+//!   speeds up by more than 0.05 m/s the next impact sets σ for the new belt without the
+//!   0.02 m/s-per-step limit (as `first_step_unlimited`) and the integral starts from 0.
+//!   `adam bench treadmill --config configs/runtime/adam_treadmill.toml --seeds 1,...,10`,
+//!   table (b), steps to match the belt up / down: seeds 1–10 up 1, 1, 2, 3, 1, 1, 3, 1, 2, 13
+//!   and down 1, 1, 4, 1, 4, 5, 7, 16, never (seed 9: no stall, the walk still 0.05 m/s off the
+//!   belt at 60 s, |position| 0.563 m), 1 (without: up 10, 11, 2, 3, 10, 1, 2, 14, 9, 16, down
+//!   9, 1, 8, 1, 17, 12, 1, 10, 16, 1): within 8 steps both ways in 7 of 10 (without: 3);
+//!   tables (a), (c), (d) unchanged. Tried and not kept: the same on a slow-down too (up 1, 1,
+//!   2, 3, 1 / down 1, 1, 3, 1, 1 on seeds 1–5, but seed 8 stalled in the step down, a step
+//!   timeout: the jump down to a slow gait at once);
 //! - **a Stop** on a moving belt (`stop_ahead_m` 0.35, `stop_approach_mps` 0.12,
 //!   `stop_library_mps` 0.21): first walks to 0.35 m ahead of the centre at the belt's speed
 //!   plus 0.12 m/s (at most 12 impacts), then slows to a library gait of σ ≤ 0.21 m/s (walks

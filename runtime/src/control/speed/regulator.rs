@@ -86,6 +86,7 @@ pub(in crate::control) struct StartSettings {
     integral_delay_steps: u32,
     belt_start_settle_steps: u32,
     reference_glide_mps: f64,
+    belt_change_unlimited_mps: f64,
     stop_ahead_m: f64,
     stop_approach_mps: f64,
     stop_library_mps: f64,
@@ -100,6 +101,7 @@ impl From<&SpeedConfig> for StartSettings {
             integral_delay_steps: c.integral_delay_steps,
             belt_start_settle_steps: c.belt_start_settle_steps,
             reference_glide_mps: c.reference_glide_mps,
+            belt_change_unlimited_mps: c.belt_change_unlimited_mps,
             stop_ahead_m: c.stop_ahead_m,
             stop_approach_mps: c.stop_approach_mps,
             stop_library_mps: c.stop_library_mps,
@@ -195,6 +197,14 @@ impl SpeedRegulator {
                 // The belt started (from rest) under the walking robot.
                 if walking && s.belt_mps == 0.0 && speed_mps != 0.0 {
                     self.settle_left = self.start.belt_start_settle_steps;
+                }
+                // The belt-change feed-forward: a moving belt sped up under the walking robot;
+                // the next impact goes to the new belt's gait at once (not on a slow-down: a
+                // jump down to a slow gait stalled, module docs).
+                let change = self.start.belt_change_unlimited_mps;
+                if walking && change > 0.0 && s.belt_mps > 0.0 && speed_mps - s.belt_mps > change {
+                    self.unlimited_next = true;
+                    s.integral_mps = 0.0;
                 }
                 s.belt_mps = speed_mps;
             }
@@ -677,6 +687,41 @@ mod tests {
         // A belt that changes speed while moving does not start it again.
         assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.30 }, true));
         assert_eq!(r.settle_left, 0);
+    }
+
+    #[test]
+    fn a_belt_change_while_walking_sets_the_next_gait_at_once_with_the_feed_forward() {
+        let config = SpeedConfig {
+            belt_change_unlimited_mps: 0.05,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        r.status.integral_mps = 0.03;
+        // A small change (0.02 m/s) and a change while not walking: limited as before.
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.27 }, true));
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.20 }, false));
+        assert!(!r.unlimited_next);
+        assert_eq!(r.status.integral_mps, 0.03);
+        // The operator steps the belt 0.20 -> 0.30 m/s under the walking robot: the next impact
+        // goes to the new belt's gait (at the centre) and the integral starts again.
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.30 }, true));
+        assert_eq!(r.status.integral_mps, 0.0);
+        r.status.library_mps = 0.20;
+        r.belt_travel_m = 0.24;
+        let sigma = r.on_impact(0.24, 0.8, (0.15, 0.40));
+        assert!((sigma - 0.30).abs() < 1e-12, "σ = {sigma}");
+        // Then limited again.
+        r.belt_travel_m = 0.24;
+        let before = r.status.library_mps;
+        let sigma = r.on_impact(0.16, 0.8, (0.15, 0.40));
+        assert!((sigma - before).abs() <= 0.02 + 1e-12, "σ = {sigma}");
+        // A slow-down is limited (a jump down to a slow gait stalled).
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.20 }, true));
+        assert!(!r.unlimited_next);
+        // Off (0, the default): the same step is limited.
+        let mut r = regulator(&SpeedConfig::default());
+        assert!(r.operator(OperatorCommand::Belt { speed_mps: 0.30 }, true));
+        assert!(!r.unlimited_next);
     }
 
     #[test]
