@@ -79,6 +79,14 @@ impl Controller {
             .unwrap_or([f64::NAN; 2])
     }
 
+    /// The legs' pitch ([`Self::touchdown_pitch_rad`]) into the estimator, with standard
+    /// deviation `sigma_rad`, against its estimate at the encoders' sample.
+    pub(super) fn measure_legs_pitch(&mut self, leg_q: &[f64; LEG_SLOTS], sigma_rad: f64) {
+        let pitch = self.touchdown_pitch_rad(leg_q);
+        self.estimator
+            .measure_pitch_lagged(pitch, sigma_rad, self.encoder_lag_samples);
+    }
+
     /// The torso pitch at which both feet are at the same height for these joint angles (both
     /// on the flat ground at a touchdown), by Newton from the current estimate, rad (NaN if the
     /// feet are too close together in x for the pitch to be observable).
