@@ -157,7 +157,8 @@
 //!
 //! What is left: the 0.25 m/s belt swings ±0.2 m with a period of some 24 s (seed 1), far
 //! slower than the loop's poles: the slow creep of the walked speed above, which no gain found
-//! follows without stalling the slow gaits. The position also drifts forward by some 0.5 % of
+//! follows without stalling the slow gaits. Its cause is the pitch estimate's touchdown
+//! measurement ("The pitch estimate drives the slow wander" below). The position also drifts forward by some 0.5 % of
 //! the belt speed at 0.30–0.35 m/s (walked/belt 100.6 %), as if leg odometry measured the steps
 //! shorter than they are (not checked).
 //!
@@ -319,6 +320,60 @@
 //!   integral off: 0.25 / 0.30 / 0.35 m/s hold 0.128 / 0.160 / 0.189 m (walked/belt 100.5 /
 //!   100.5 / 99.9 %), but 2 of 5 stall at 0.15 m/s and one run at 0.20 m/s walks 71 % of the
 //!   belt: not kept.
+//!
+//! # The pitch estimate drives the slow wander (measured 2026-12-05, issue #29)
+//! `cargo run --release -p runtime --example pitch_probe -- configs/runtime/adam.toml GAIT V 40
+//! SEED MODE [OFFSET_MRAD]`: each library gait alone on an endless belt at its speed V, walked
+//! speed Σ length / Σ duration of the sim's touchdowns after 10 s. The 0.225 m/s gait, seed 1,
+//! walked/planned and its step durations after 10 s:
+//! - the shipped estimator (`est`): 122.4 %, 0.615–0.699 s, wandering over some 13 s (0.699 s
+//!   at 14.0 s, 0.615 at 20.5, 0.685 at 27.7, 0.640 at 31.6, 0.675 at 33.6);
+//! - the true pitch handed to the controller (`truth`: at the encoders' sample, the one the
+//!   joint angles are from): 130.5 %, 0.613–0.625 s; at the IMU's sample (`truth-imu`, one
+//!   control period later on the simulated bus): 139.7 %, 0.577–0.585 s. So the estimate's
+//!   error drives the wander, not the other way round: with the truth the gait walks steadily,
+//!   but faster, not at its plan;
+//! - the shipped estimator with an exact gyro (`exact-gyro`: no noise, no bias, no integration
+//!   error; the touchdown measurement on): 120.0 %, 0.637–0.785 s; on a noiseless IMU 127.8 %,
+//!   0.611–0.686 s; with `touchdown_pitch_sigma_rad` 0.003 or 0.001 (0.01 shipped): 0.606–0.685
+//!   and 0.609–0.679 s. The wander comes from the touchdown measurement: its +1.5 mrad bias
+//!   and ±0.65 mrad scatter from step to step (`runtime::estimator`, "The touchdown pitch"),
+//!   which the filter's slow loop turns into a slow wander of its bias estimate;
+//! - a constant error (`truth OFFSET_MRAD`, + = the estimate above the truth): −2 / −1 / 0 /
+//!   +1 / +2 / +3 mrad: 142.9 / 137.9 / 130.5 / 118.4 / 92.4 / 82.8 % (steps 0.568–0.574 …
+//!   0.936–0.985 s, each steady); the 0.35 m/s gait 115.0 % at 0 and 112.1 % at +2 mrad; the
+//!   0.15 m/s gait 166.5 % at 0, 101.9 % at +1, and +2 mrad stalls and falls at 13.4 s. Not
+//!   linear: the 0.225 m/s gait loses 12 % of its plan for the first mrad, 26 % for the
+//!   second, the 0.15 m/s gait 65 % for the first; the shipped estimator's +1.5 mrad bias is
+//!   what has held the slow gaits near their plan.
+//!
+//! **The estimator corrected** (`estimator.encoder_lag_samples = 1` and
+//! `touchdown_after_impact = true`; pitch RMS against the truth 0.058° at 0.225 m/s, was
+//! 0.137°). Each gait alone, seeds 1 / 2 / 3, walked/planned over 10–40 s, and the swing of
+//! the mean speed over 4 steps (max − min, % of the mean) — shipped, then corrected:
+//! ```text
+//! gait m/s  shipped: walked/plan %     swing %            corrected: walked/plan %   swing %
+//! 0.150     85.9 / 104.1 / 102.2     63.1 / 22.2 / 12.5   179.9 / 182.4 / 182.4    10.0 / 12.6 / 3.5
+//! 0.175    102.2 / 108.2 / 103.6     13.3 / 14.7 /  8.8   152.2 / 157.3 / 155.0    10.4 /  7.8 / 7.7
+//! 0.200    106.1 / 113.2 / 104.3     30.5 / 19.8 / 15.3   145.4 / 148.4 / 146.7     7.5 /  5.3 / 5.5
+//! 0.225    122.4 / 127.6 / 125.4     12.2 / 15.8 /  8.5   137.4 / 139.4 / 138.6     4.2 /  3.5 / 5.2
+//! 0.250    122.7 / 125.5 / 124.5      8.2 /  8.2 /  7.0   130.5 / 131.6 / 131.5     4.7 /  4.0 / 2.3
+//! 0.275    118.8 / 121.1 / 119.6      7.2 /  4.1 /  4.9   124.0 / 125.1 / 124.7     4.0 /  4.3 / 2.2
+//! 0.300    115.4 / 116.5 / 116.0      4.2 /  3.7 /  3.2   119.4 / 120.5 / 120.0     3.6 /  3.0 / 3.5
+//! 0.325    119.9 / 120.5 / 120.3      3.9 /  3.8 /  1.8   121.1 / 121.5 / 121.3     2.6 /  4.4 / 2.3
+//! 0.350    115.3 / 115.4 / 115.4      2.7 /  3.0 /  2.4   115.7 / 116.3 / 116.1     2.2 /  2.7 / 1.8
+//! 0.375    110.7 / 111.0 / 111.0      4.3 /  2.6 /  2.5   111.3 / 111.8 / 111.4     2.3 /  1.8 / 1.8
+//! 0.400    107.0 / 107.3 / 107.0      2.2 /  2.0 /  1.8   107.5 / 108.0 / 107.7     2.3 /  2.4 / 1.4
+//! ```
+//! Corrected, every gait walks steadily and the seeds agree within 3 %, but the library
+//! walks 0.27–0.43 m/s: no gait walks the 0.15–0.25 m/s belts. `adam bench treadmill` with
+//! the treadmill config so corrected, seeds 1–5: the 0.15 / 0.20 m/s belts fall off the front
+//! 5/5, 0.25 m/s 4/5, 0.30 / 0.35 m/s 0.133 / 0.105 m (shipped 0.132 / 0.106 m), the belt
+//! step falls or trips 5/5; with `walked_mps` set to the corrected speeds (0.262, 0.271,
+//! 0.294, 0.312, 0.328, 0.343, 0.360, 0.394, 0.406, 0.418, 0.431) 0.30 / 0.35 m/s hold
+//! 0.100 / 0.112 m, the three slow belts and the belt step fall 5/5. Not kept in the shipped
+//! configs: the correction is right, but the slow gaits then need a library that walks its
+//! plan (the loop delay and the stiffness above) before the treadmill can use it.
 //!
 //! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
 //! With the walked-speed calibration: 0.15–0.35 m/s: no fall, no trip (none in seeds 6–10
