@@ -194,6 +194,10 @@ pub struct WalkConfig {
     pub stop_step_length_m: f64,
 }
 
+/// The most IMU samples `estimator.encoder_lag_samples` may give: the pitch estimator keeps
+/// that many past estimates.
+pub const MAX_ENCODER_LAG_SAMPLES: u32 = 3;
+
 /// Torso pitch estimator (see [`crate::estimator`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -217,7 +221,7 @@ pub struct EstimatorConfig {
     #[serde(default = "default_touchdown_pitch_sigma_rad")]
     pub touchdown_pitch_sigma_rad: f64,
     /// How many IMU samples older the joint encoders' sample is than the IMU sample of the same
-    /// tick (0 ..= [`crate::estimator::MAX_MEASUREMENT_LAG_SAMPLES`]): the legs' pitch is
+    /// tick (0 ..= [`MAX_ENCODER_LAG_SAMPLES`]): the legs' pitch is
     /// compared with the estimate of that time. The simulated bus: 1 (its replies sample the
     /// robot at the start of the exchange, its IMU at the end of the period). 0 if absent.
     #[serde(default)]
@@ -687,7 +691,7 @@ impl RuntimeConfig {
             "estimator.touchdown_pitch_sigma_rad",
             e.touchdown_pitch_sigma_rad,
         )?;
-        if e.encoder_lag_samples as usize > crate::estimator::MAX_MEASUREMENT_LAG_SAMPLES {
+        if e.encoder_lag_samples > MAX_ENCODER_LAG_SAMPLES {
             return Err(bad(
                 "estimator.encoder_lag_samples",
                 e.encoder_lag_samples.to_string(),

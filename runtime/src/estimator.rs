@@ -70,7 +70,7 @@ pub const GRAVITY_MPS2: f64 = 9.80665;
 
 /// The most IMU samples a direct pitch measurement may lag the latest one
 /// ([`PitchEstimator::measure_pitch_lagged`]).
-pub const MAX_MEASUREMENT_LAG_SAMPLES: usize = 3;
+pub const MAX_MEASUREMENT_LAG_SAMPLES: usize = crate::config::MAX_ENCODER_LAG_SAMPLES as usize;
 
 /// Noise model of the filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
