@@ -336,8 +336,41 @@
 //! 4 s watch after the push. Watched to 12 s (the scenario since 2026-12-05), +40 N rides
 //! through 0 of 5 at every point: the push carries the robot ahead, the position loop takes
 //! the library down to a slow gait that stalls. The stall relaunch
-//! (`runtime::control::recovery`) restarts a stalled step from double support: −20 N then 3,
-//! 0, 5, 5, 5 of 5 (its module docs).
+//! (`runtime::control::recovery`) restarts a stalled step from double support: −20 N then
+//! walks on in 3, 0, 5, 5, 5 of 5 (its module docs); a relaunched run stalled, so it no longer
+//! rides through: −20 N 0, 0, 5, 5, 0 of 5, +40 N 0 of 5 (below, "Forward pushes").
+//!
+//! # Forward pushes (traced 2026-12-05, the treadmill config, +40 N for 0.2 s at 0.25 m/s)
+//! `adam run --backend sim --config configs/runtime/adam_treadmill.toml --belt 0.25 --push
+//! 3:40:0.2:P --duration 12s --seed 1 --log F` (P = 0.1, 0.5, 0.9), the `/speed` rows per
+//! impact. +40 N for 0.2 s is 8 N·s, +0.49 m/s of the 16.4 kg robot's centre of mass, about
+//! twice its walking speed. At 50 %: steps of 0.396 and 0.410 m/s (0.227 and 0.223 m, the gait's
+//! 0.18 m), the lever lands the next +0.016 and +0.020 m longer, the position loop and the
+//! integral (−0.03 m/s) take σ from 0.215 to 0.175 while the steps walk 0.24 m/s, and the step
+//! from 6.24 s stalls (one relaunch, a fall at 9.1 s). At 10 % and 90 % the pushed steps walk
+//! 0.58–0.76 m/s, 0.23–0.27 m long (the new steps start at phase −0.14 … −0.23, behind θ⁺),
+//! the lever at its 0.04 m limit, σ down to 0.175 within two impacts, and the next step stalls.
+//! The leg odometry also loses 5–7 cm to the stance foot's slip under the push (friction
+//! warnings), and more over a relaunch.
+//!
+//! **What kills the walk is not the regulator.** Tried and not kept, a disturbance settle: a
+//! step whose speed departs from the belt's (+ offset) by more than 0.13 m/s (0.10 tried too)
+//! sets, for 6 impacts after the last such step, the command to the belt's speed (the
+//! reference follows the estimate, as after the belt starts), the lever and the integral at
+//! rest, then the reference glides back at 0.02 m/s. It does what it says — σ stays at
+//! 0.212 m/s and the lever at 0 after the push — and the step still stalls, one step earlier (50 %,
+//! seed 1: 0.396, 0.401, 0.251, 0.298 m/s, then the step from 6.04 s starts with a phase rate of
+//! 0.6 /s instead of 2.9, runs back and stalls; relaunched at 7.5 s, off the back at 11.9 s).
+//! `adam bench treadmill` with it (seeds 1–5): +40 N 0 of 5 at every point (+1 walked on after a
+//! relaunch at 70 %; trips: joint limit ×10, step timeout ×8), −20 N 0, 0, 5, 5, 0 (+4, +4
+//! relaunched), tables (a), (b), (d) unchanged at 0.13 m/s (at 0.10 m/s one Stop → Stand → Walk
+//! fell off the back). After a forward push the steps lose their energy balance within two or
+//! three steps whatever gait and lever the next impacts pick: a long fast step, a short one,
+//! then a step that starts with too little momentum. For information, with the orbit lever on
+//! (`[orbit] enabled`, `with_speed_control`; not the treadmill config's, not kept): +40 N still 0
+//! of 5 (+1 … +3 walked on after relaunches at each point), −20 N 0, 0, 5, 5, 0 (+5, +2, +5),
+//! while table (a)'s max |position| goes to 0.395 / 0.111 / 0.266 / 0.116 / 0.104 m and the belt
+//! step's to ≤ 0.211 m (but 11 and 12 steps to match the step up in seeds 2 and 5).
 //!
 //! Before the calibration (the same gains): walked/belt 103.4 / 100.7 / 99.4 / 99.8 /
 //! 100.1 %, −20 N 3 of 5 at 50 %, +40 N 4 of 5 at 90 %, the largest pushes ridden through at
