@@ -81,7 +81,9 @@
 //! --config configs/runtime/adam_treadmill.toml`, 2026-12-05, seeds 1–5), −20 N rides through 0,
 //! 0, 5, 5, 0 of 5 (walked on after a relaunch: 3 more at 10 %, 5 at 90 %), +40 N 0 of 5 at
 //! every point; the bisection's largest pushes ridden through at every point are unchanged
-//! (none of them needed a relaunch): backward 5, 5, 5, 2, 5 N, forward 10, 8, 8, 10, 8 N.
+//! (none of them needed a relaunch): backward 5, 5, 5, 2, 5 N, forward 10, 8, 8, 10, 8 N. With
+//! the disturbance settle (`runtime::control::speed`, "Forward pushes") −20 N walks on after a
+//! relaunch in 5, 4 and 5 more at 10, 30 and 90 %, and +40 N rides through 0, 1, 0, 3, 0 of 5.
 //!
 //! Tried and not kept (seeds 1–5, −20 N / +40 N at 10 / 30 / 50 / 70 / 90 %):
 //! - relaunching as soon as the stalled step's swing foot is within 2 cm of the ground (0.3 s
