@@ -385,7 +385,9 @@
 //! implausible IMU), −20 N 0, 0, 5, 5, 0 with 5, 4 and 5 more walking on after a relaunch at 10,
 //! 30 and 90 % (without the settle 3, 0 and 5); tables (a), (b) and (d) and the bisection's
 //! largest pushes (backward 5, 5, 5, 2, 5 N, forward 10, 8, 8, 10, 8 N) unchanged, figure for
-//! figure. Traced (+40 N, seed 1): at 90 % σ jumps to 0.40, the steps walk 0.76 (pushed), 0.62,
+//! figure. Seeds 6–10 (`--seeds 6,7,8,9,10`): +40 N 1, 0, 0, 1, 0 of 5 (without: 0 at every
+//! point), −20 N 0, 0, 4, 5, 0 with 11 of 15 walking on after a relaunch at 10/30/90 % (without:
+//! 7), tables (a), (b), (d) and the bisection identical with and without. Traced (+40 N, seed 1): at 90 % σ jumps to 0.40, the steps walk 0.76 (pushed), 0.62,
 //! 0.55, 0.34, 0.42, 0.39 … m/s while σ comes down 0.02 a step, and the robot, 0.75 m ahead, leaves the front
 //! of the belt at 8.4 s; at 10 % the step from 7.32 s (σ 0.32) stalls, a relaunch, then a joint
 //! limit. A faster way down is worse (σ and the command down 0.04 m/s a step: +40 N 0, 0, 0, 2, 0
