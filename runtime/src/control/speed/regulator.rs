@@ -54,8 +54,12 @@ pub(in crate::control) struct SpeedRegulator {
     steps_since_walk: u32,
     /// The position loop's reference, m (0: the centre).
     reference_m: f64,
-    /// Impacts left during which the reference follows the estimate (after the belt started).
+    /// Impacts left during which the reference follows the estimate (after the belt started,
+    /// or after a disturbed step).
     settle_left: u32,
+    /// The settle under way follows a disturbed step (`speed.disturbance_settle_mps`): the
+    /// command follows the robot down and the integral rests too.
+    disturbed: bool,
     /// A Stop under way with speed control: its approach and slowing steps.
     stop: Option<StopPhase>,
 }
@@ -86,6 +90,8 @@ pub(in crate::control) struct StartSettings {
     integral_delay_steps: u32,
     belt_start_settle_steps: u32,
     reference_glide_mps: f64,
+    disturbance_settle_mps: f64,
+    disturbance_settle_steps: u32,
     stop_ahead_m: f64,
     stop_approach_mps: f64,
     stop_library_mps: f64,
@@ -100,6 +106,8 @@ impl From<&SpeedConfig> for StartSettings {
             integral_delay_steps: c.integral_delay_steps,
             belt_start_settle_steps: c.belt_start_settle_steps,
             reference_glide_mps: c.reference_glide_mps,
+            disturbance_settle_mps: c.disturbance_settle_mps,
+            disturbance_settle_steps: c.disturbance_settle_steps,
             stop_ahead_m: c.stop_ahead_m,
             stop_approach_mps: c.stop_approach_mps,
             stop_library_mps: c.stop_library_mps,
@@ -133,6 +141,7 @@ impl SpeedRegulator {
             steps_since_walk: 0,
             reference_m: 0.0,
             settle_left: 0,
+            disturbed: false,
             stop: None,
         }
     }
@@ -239,6 +248,7 @@ impl SpeedRegulator {
         self.steps_since_walk = if from_stand { 0 } else { u32::MAX };
         self.reference_m = 0.0;
         self.settle_left = 0;
+        self.disturbed = false;
         self.stop = None;
         let s = &mut self.status;
         if !(from_stand && st.position_from_start) {
@@ -306,11 +316,28 @@ impl SpeedRegulator {
         } else {
             self.position_gain_per_s
         };
-        // The reference: following the estimate while the robot settles after the belt started,
-        // then gliding back to the centre; a Stop's target ahead.
+        // A disturbed step (a push): its speed departs from the operator's by more than
+        // `speed.disturbance_settle_mps` (not in a Stop, nor in the steps after a launch).
+        let threshold = self.start.disturbance_settle_mps;
+        let operator_mps = s.belt_mps + s.offset_mps;
+        if measured
+            && threshold > 0.0
+            && self.stop.is_none()
+            && self.steps_since_walk >= self.start.integral_delay_steps
+            && (s.step_speed_mps - operator_mps).abs() > threshold
+        {
+            // The first disturbed step: σ goes to the robot's speed at once.
+            self.unlimited_next |= !self.disturbed;
+            self.settle_left = self.settle_left.max(self.start.disturbance_settle_steps);
+            self.disturbed = true;
+        }
+        // The reference: following the estimate while the robot settles after the belt started
+        // or a disturbance, then gliding back to the centre; a Stop's target ahead.
         let settling = measured && self.settle_left > 0;
+        let settling_disturbed = settling && self.disturbed;
         if settling {
             self.settle_left -= 1;
+            self.disturbed &= self.settle_left > 0;
             self.reference_m = s.position_m;
         } else if measured && self.stop.is_none() {
             let glide = self.start.reference_glide_mps * duration_s;
@@ -326,12 +353,17 @@ impl SpeedRegulator {
             Some(StopPhase::Approach(_)) if self.start.stop_approach_mps > 0.0 => {
                 s.belt_mps + s.offset_mps + self.start.stop_approach_mps
             }
+            // After a disturbance: the robot's speed, less a step's change, down to the belt's.
+            _ if settling_disturbed => {
+                operator_mps.max(s.step_speed_mps - self.max_change_per_step_mps)
+            }
             _ => s.belt_mps + s.offset_mps - k_p * (s.position_m - self.reference_m),
         };
         s.commanded_mps = s.requested_mps.clamp(lo, hi);
         s.clamped = s.commanded_mps != s.requested_mps;
-        let resting =
-            self.steps_since_walk <= self.start.integral_delay_steps || self.stop.is_some();
+        let resting = self.steps_since_walk <= self.start.integral_delay_steps
+            || self.stop.is_some()
+            || settling_disturbed;
         let k_i = if resting { 0.0 } else { self.integral_gain };
         let integral =
             (s.integral_mps + k_i * error).clamp(-self.integral_limit_mps, self.integral_limit_mps);
@@ -657,6 +689,50 @@ mod tests {
             (sigma - (last - 0.02)).abs() < 1e-12,
             "σ = {sigma} after {last}"
         );
+    }
+
+    #[test]
+    fn after_a_pushed_step_the_command_follows_the_robot_down_then_the_reference_glides_back() {
+        let config = SpeedConfig {
+            disturbance_settle_mps: 0.13,
+            disturbance_settle_steps: 2,
+            speed_gain: 0.0,
+            ..start_config()
+        };
+        let mut r = regulator(&config);
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.40));
+        // A step 0.12 m/s faster than the belt: within the threshold, the lever acts.
+        r.belt_travel_m = 0.1;
+        r.on_impact(0.185, 0.5, (0.15, 0.40));
+        assert!(r.status.step_offset_m > 0.0 && r.status.requested_mps < 0.25);
+        r.status.position_m = 0.0;
+        r.status.integral_mps = 0.01;
+        // A pushed step at 0.65 m/s: the command is its speed less 0.02 m/s, σ goes there at
+        // once (the range's top), no lever, the integral at rest.
+        let sigma = r.on_impact(0.26, 0.4, (0.15, 0.40));
+        assert!((r.status.requested_mps - 0.63).abs() < 1e-12);
+        assert_eq!(sigma, 0.40);
+        assert_eq!(r.status.step_offset_m, 0.0);
+        assert_eq!(r.status.integral_mps, 0.01);
+        // The next, 0.30 m/s (within the threshold), the last of the 2 settling impacts: the
+        // command follows it down, σ by the step limit; then the reference glides back.
+        r.on_impact(0.15, 0.5, (0.15, 0.40));
+        assert!((r.status.requested_mps - 0.28).abs() < 1e-12);
+        assert!((r.status.library_mps - 0.38).abs() < 1e-12);
+        r.belt_travel_m = 0.125;
+        r.on_impact(0.125, 0.5, (0.15, 0.40));
+        assert!(r.status.requested_mps < 0.25 && r.status.requested_mps > 0.24);
+        // A slow step (a backward push) settles at the belt's speed; off (0) nothing settles.
+        r.belt_travel_m = 0.125;
+        r.on_impact(0.05, 0.5, (0.15, 0.40));
+        assert_eq!(r.status.requested_mps, 0.25);
+        let mut r = regulator(&start_config());
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.40));
+        r.belt_travel_m = 0.1;
+        r.on_impact(0.26, 0.4, (0.15, 0.40));
+        assert!(r.status.requested_mps < 0.25 && r.status.step_offset_m > 0.0);
     }
 
     #[test]
