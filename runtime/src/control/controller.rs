@@ -614,7 +614,9 @@ impl Controller {
                     self.launch_requested = false;
                     self.begin_launch(t, FROM_STAND, &leg_q, &leg_dq);
                 }
-                if self.launch.is_some_and(|l| t - l.start_t_s < l.duration_s)
+                if self
+                    .launch
+                    .is_some_and(|l| t - l.start_t_s < l.timing.duration_s)
                     && !self.launch_on_orbit(t, &leg_q, &leg_dq)
                 {
                     self.launch_commands(t, &leg_q, &leg_dq, &mut out.commands);

@@ -4,7 +4,7 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
-use crate::control::orbit::{pinned, LEAN};
+use crate::control::orbit::LEAN;
 use crate::control::speed::LEVER_BLEND_FROM;
 use crate::control::tick::ControlState;
 use crate::control::transitions::{blend_weight, BRAKE_BLEND_FROM, START_KNEE_BLEND_SPAN};
@@ -197,7 +197,9 @@ impl Controller {
             && (!switching || self.orbit.with_speed_control);
         let sigma = if on {
             let (q, dq) = self.measured_state(leg_q, leg_dq);
-            pinned(&self.geometry(), &q, &dq, self.stance).unwrap_or(f64::NAN)
+            self.geometry()
+                .pinned_momentum(self.stance, &q, &dq)
+                .map_or(f64::NAN, |(sigma, _)| sigma)
         } else {
             f64::NAN
         };

@@ -26,7 +26,7 @@ impl SpeedMap for Uncalibrated {
 }
 
 /// The regulator and the position loop: what the operator set and what the steps measured.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(in crate::control) struct SpeedRegulator {
     position_gain_per_s: f64,
     position_gain_per_step: f64,
@@ -46,8 +46,9 @@ pub(in crate::control) struct SpeedRegulator {
     /// last two steps, a stride: left and right steps differ).
     previous_step: Option<(f64, f64)>,
     pub(in crate::control) status: SpeedStatus,
-    /// The start and restart settings (`speed.launch_gait_fraction` ...).
-    start: StartSettings,
+    /// The `[speed]` section, for its start and restart settings (`speed.launch_gait_fraction`
+    /// ...): cloned once, at start-up.
+    start: SpeedConfig,
     /// The next impact sets σ without the per-step limit.
     unlimited_next: bool,
     /// Impacts since the last Walk from Stand.
@@ -81,40 +82,6 @@ const STOP_TARGET_TOLERANCE_M: f64 = 0.05;
 /// A Stop's approach brakes after this many impacts even short of its target.
 const STOP_APPROACH_MAX_STEPS: u32 = 12;
 
-/// The start and restart part of [`SpeedConfig`].
-#[derive(Clone, Copy, Debug)]
-pub(in crate::control) struct StartSettings {
-    pub(in crate::control) launch_gait_fraction: f64,
-    first_step_unlimited: bool,
-    position_from_start: bool,
-    integral_delay_steps: u32,
-    belt_start_settle_steps: u32,
-    reference_glide_mps: f64,
-    disturbance_settle_mps: f64,
-    disturbance_settle_steps: u32,
-    stop_ahead_m: f64,
-    stop_approach_mps: f64,
-    stop_library_mps: f64,
-}
-
-impl From<&SpeedConfig> for StartSettings {
-    fn from(c: &SpeedConfig) -> Self {
-        Self {
-            launch_gait_fraction: c.launch_gait_fraction,
-            first_step_unlimited: c.first_step_unlimited,
-            position_from_start: c.position_from_start,
-            integral_delay_steps: c.integral_delay_steps,
-            belt_start_settle_steps: c.belt_start_settle_steps,
-            reference_glide_mps: c.reference_glide_mps,
-            disturbance_settle_mps: c.disturbance_settle_mps,
-            disturbance_settle_steps: c.disturbance_settle_steps,
-            stop_ahead_m: c.stop_ahead_m,
-            stop_approach_mps: c.stop_approach_mps,
-            stop_library_mps: c.stop_library_mps,
-        }
-    }
-}
-
 impl SpeedRegulator {
     /// A regulator whose first library speed is `start_mps` (the gait walked before speed
     /// control begins).
@@ -136,7 +103,7 @@ impl SpeedRegulator {
             last_t_s: None,
             previous_step: None,
             status,
-            start: StartSettings::from(config),
+            start: config.clone(),
             unlimited_next: false,
             steps_since_walk: 0,
             reference_m: 0.0,
@@ -146,8 +113,8 @@ impl SpeedRegulator {
         }
     }
 
-    /// The start and restart settings.
-    pub(in crate::control) fn start_settings(&self) -> &StartSettings {
+    /// The start and restart settings: the `[speed]` section.
+    pub(in crate::control) fn start_settings(&self) -> &SpeedConfig {
         &self.start
     }
 
@@ -164,7 +131,7 @@ impl SpeedRegulator {
     /// that gait; then the braking step ([`SpeedRegulator::brake_now`]). Neither: it brakes
     /// at once, as without speed control.
     pub(in crate::control) fn begin_stop(&mut self) {
-        let st = self.start;
+        let st = &self.start;
         let ahead = st.stop_ahead_m > 0.0 && self.status.belt_mps > 0.0;
         self.stop = if ahead {
             self.reference_m = st.stop_ahead_m;
@@ -242,7 +209,7 @@ impl SpeedRegulator {
     }
 
     fn forget(&mut self, from_stand: bool) {
-        let st = self.start;
+        let st = &self.start;
         self.previous_step = None;
         self.unlimited_next = from_stand && st.first_step_unlimited;
         self.steps_since_walk = if from_stand { 0 } else { u32::MAX };
