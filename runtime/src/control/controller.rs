@@ -817,7 +817,7 @@ impl Controller {
     /// the library gait `speed.launch_gait_fraction` of the way from the Stand gait to the one
     /// that walks the belt's speed (`runtime::control::speed`, "Start and restart").
     fn launch_gait(&mut self) {
-        let fraction = self.regulator.start_settings().launch_gait_fraction;
+        let fraction = self.regulator.config().launch_gait_fraction;
         let Some(library) = &self.library else {
             return;
         };

@@ -28,16 +28,6 @@ impl SpeedMap for Uncalibrated {
 /// The regulator and the position loop: what the operator set and what the steps measured.
 #[derive(Clone, Debug)]
 pub(in crate::control) struct SpeedRegulator {
-    position_gain_per_s: f64,
-    position_gain_per_step: f64,
-    speed_gain: f64,
-    integral_gain: f64,
-    integral_limit_mps: f64,
-    max_change_per_step_mps: f64,
-    step_length_gain_s: f64,
-    max_step_offset_m: f64,
-    slow_step_length_gain_s: f64,
-    lever_below_library: bool,
     /// Belt travel since the last impact, m.
     belt_travel_m: f64,
     /// Time of the last [`SpeedRegulator::advance`], s.
@@ -46,9 +36,9 @@ pub(in crate::control) struct SpeedRegulator {
     /// last two steps, a stride: left and right steps differ).
     previous_step: Option<(f64, f64)>,
     pub(in crate::control) status: SpeedStatus,
-    /// The `[speed]` section, for its start and restart settings (`speed.launch_gait_fraction`
-    /// ...): cloned once, at start-up.
-    start: SpeedConfig,
+    /// The `[speed]` section: the law's gains and the start and restart settings (cloned once,
+    /// at start-up; read, never changed).
+    config: SpeedConfig,
     /// The next impact sets σ without the per-step limit.
     unlimited_next: bool,
     /// Impacts since the last Walk from Stand.
@@ -89,21 +79,11 @@ impl SpeedRegulator {
         let mut status = SpeedStatus::UNKNOWN;
         status.library_mps = start_mps;
         Self {
-            position_gain_per_s: config.position_gain_per_s,
-            position_gain_per_step: config.position_gain_per_step,
-            speed_gain: config.speed_gain,
-            integral_gain: config.integral_gain,
-            integral_limit_mps: config.integral_limit_mps,
-            max_change_per_step_mps: config.max_change_per_step_mps,
-            step_length_gain_s: config.step_length_gain_s,
-            max_step_offset_m: config.max_step_offset_m,
-            slow_step_length_gain_s: config.slow_step_length_gain_s,
-            lever_below_library: config.lever_below_library,
             belt_travel_m: 0.0,
             last_t_s: None,
             previous_step: None,
             status,
-            start: config.clone(),
+            config: config.clone(),
             unlimited_next: false,
             steps_since_walk: 0,
             reference_m: 0.0,
@@ -113,9 +93,9 @@ impl SpeedRegulator {
         }
     }
 
-    /// The start and restart settings: the `[speed]` section.
-    pub(in crate::control) fn start_settings(&self) -> &SpeedConfig {
-        &self.start
+    /// The `[speed]` section it runs on.
+    pub(in crate::control) fn config(&self) -> &SpeedConfig {
+        &self.config
     }
 
     /// Start (the Ramp to Stand begins): the robot stands at the belt's centre; with
@@ -131,7 +111,7 @@ impl SpeedRegulator {
     /// that gait; then the braking step ([`SpeedRegulator::brake_now`]). Neither: it brakes
     /// at once, as without speed control.
     pub(in crate::control) fn begin_stop(&mut self) {
-        let st = &self.start;
+        let st = &self.config;
         let ahead = st.stop_ahead_m > 0.0 && self.status.belt_mps > 0.0;
         self.stop = if ahead {
             self.reference_m = st.stop_ahead_m;
@@ -170,7 +150,7 @@ impl SpeedRegulator {
             OperatorCommand::Belt { speed_mps } if speed_mps.is_finite() => {
                 // The belt started (from rest) under the walking robot.
                 if walking && s.belt_mps == 0.0 && speed_mps != 0.0 {
-                    self.settle_left = self.start.belt_start_settle_steps;
+                    self.settle_left = self.config.belt_start_settle_steps;
                 }
                 s.belt_mps = speed_mps;
             }
@@ -209,7 +189,7 @@ impl SpeedRegulator {
     }
 
     fn forget(&mut self, from_stand: bool) {
-        let st = &self.start;
+        let st = &self.config;
         self.previous_step = None;
         self.unlimited_next = from_stand && st.first_step_unlimited;
         self.steps_since_walk = if from_stand { 0 } else { u32::MAX };
@@ -278,24 +258,24 @@ impl SpeedRegulator {
             0.0
         };
         // The position loop's gain per second, or per step over the last stride's mean step.
-        let k_p = if self.position_gain_per_step > 0.0 && measured {
-            self.position_gain_per_step / step_s
+        let k_p = if self.config.position_gain_per_step > 0.0 && measured {
+            self.config.position_gain_per_step / step_s
         } else {
-            self.position_gain_per_s
+            self.config.position_gain_per_s
         };
         // A disturbed step (a push): its speed departs from the operator's by more than
         // `speed.disturbance_settle_mps` (not in a Stop, nor in the steps after a launch).
-        let threshold = self.start.disturbance_settle_mps;
+        let threshold = self.config.disturbance_settle_mps;
         let operator_mps = s.belt_mps + s.offset_mps;
         if measured
             && threshold > 0.0
             && self.stop.is_none()
-            && self.steps_since_walk >= self.start.integral_delay_steps
+            && self.steps_since_walk >= self.config.integral_delay_steps
             && (s.step_speed_mps - operator_mps).abs() > threshold
         {
             // The first disturbed step: σ goes to the robot's speed at once.
             self.unlimited_next |= !self.disturbed;
-            self.settle_left = self.settle_left.max(self.start.disturbance_settle_steps);
+            self.settle_left = self.settle_left.max(self.config.disturbance_settle_steps);
             self.disturbed = true;
         }
         // The reference: following the estimate while the robot settles after the belt started
@@ -307,7 +287,7 @@ impl SpeedRegulator {
             self.disturbed &= self.settle_left > 0;
             self.reference_m = s.position_m;
         } else if measured && self.stop.is_none() {
-            let glide = self.start.reference_glide_mps * duration_s;
+            let glide = self.config.reference_glide_mps * duration_s;
             self.reference_m -= if glide > 0.0 {
                 self.reference_m.clamp(-glide, glide)
             } else {
@@ -317,25 +297,31 @@ impl SpeedRegulator {
         self.steps_since_walk = self.steps_since_walk.saturating_add(1);
         s.requested_mps = match self.stop {
             // A Stop's approach walks ahead at a set speed over the belt's.
-            Some(StopPhase::Approach(_)) if self.start.stop_approach_mps > 0.0 => {
-                s.belt_mps + s.offset_mps + self.start.stop_approach_mps
+            Some(StopPhase::Approach(_)) if self.config.stop_approach_mps > 0.0 => {
+                s.belt_mps + s.offset_mps + self.config.stop_approach_mps
             }
             // After a disturbance: the robot's speed, less a step's change, down to the belt's.
             _ if settling_disturbed => {
-                operator_mps.max(s.step_speed_mps - self.max_change_per_step_mps)
+                operator_mps.max(s.step_speed_mps - self.config.max_change_per_step_mps)
             }
             _ => s.belt_mps + s.offset_mps - k_p * (s.position_m - self.reference_m),
         };
         s.commanded_mps = s.requested_mps.clamp(lo, hi);
         s.clamped = s.commanded_mps != s.requested_mps;
-        let resting = self.steps_since_walk <= self.start.integral_delay_steps
+        let resting = self.steps_since_walk <= self.config.integral_delay_steps
             || self.stop.is_some()
             || settling_disturbed;
-        let k_i = if resting { 0.0 } else { self.integral_gain };
-        let integral =
-            (s.integral_mps + k_i * error).clamp(-self.integral_limit_mps, self.integral_limit_mps);
+        let k_i = if resting {
+            0.0
+        } else {
+            self.config.integral_gain
+        };
+        let integral = (s.integral_mps + k_i * error).clamp(
+            -self.config.integral_limit_mps,
+            self.config.integral_limit_mps,
+        );
         // The library gait of the command, plus the step-to-step feedback.
-        let sigma = map.sigma_for(s.commanded_mps + self.speed_gain * error + integral);
+        let sigma = map.sigma_for(s.commanded_mps + self.config.speed_gain * error + integral);
         // Anti-windup: the integral only grows while σ is inside the library.
         if (sigma_lo..=sigma_hi).contains(&sigma) || integral.abs() < s.integral_mps.abs() {
             s.integral_mps = integral;
@@ -348,7 +334,7 @@ impl SpeedRegulator {
         let r = if std::mem::take(&mut self.unlimited_next) {
             f64::INFINITY
         } else {
-            self.max_change_per_step_mps
+            self.config.max_change_per_step_mps
         };
         s.library_mps = sigma.clamp(sigma_lo, sigma_hi).clamp(last - r, last + r);
         // The step lever: a step faster than the command lands the next step longer (more
@@ -356,10 +342,10 @@ impl SpeedRegulator {
         // stride's: averaged over two steps the lever came a step late and overshot (stalls).
         // After a slow step the gain is `slow_step_length_gain_s` (0 in the treadmill config: a
         // shorter step after a slow one stalled more walks on the shipped library; module docs).
-        let m = self.max_step_offset_m;
+        let m = self.config.max_step_offset_m;
         s.step_offset_m = if measured && s.commanded_mps.is_finite() {
             // Below the slowest gait the lever may measure against the request (room below).
-            let reference = if self.lever_below_library && s.requested_mps < lo {
+            let reference = if self.config.lever_below_library && s.requested_mps < lo {
                 s.requested_mps
             } else {
                 s.commanded_mps
@@ -368,9 +354,9 @@ impl SpeedRegulator {
             let gain = if settling {
                 0.0
             } else if fast < 0.0 {
-                self.slow_step_length_gain_s
+                self.config.slow_step_length_gain_s
             } else {
-                self.step_length_gain_s
+                self.config.step_length_gain_s
             };
             (gain * fast).clamp(-m, m)
         } else {
@@ -396,8 +382,8 @@ impl SpeedRegulator {
             _ => StopPhase::Slowing,
         });
         if self.stop == Some(StopPhase::Slowing) {
-            let slow = if self.start.stop_library_mps > 0.0 {
-                self.start.stop_library_mps.clamp(sigma_lo, sigma_hi)
+            let slow = if self.config.stop_library_mps > 0.0 {
+                self.config.stop_library_mps.clamp(sigma_lo, sigma_hi)
             } else {
                 sigma_hi
             };
