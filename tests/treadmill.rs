@@ -163,16 +163,18 @@ fn the_shipped_library_is_one_continuous_family() {
     }
 }
 
-/// Belt 0.25, 0.30 and 0.35 m/s for 60 s with speed control, seeds 1–5: no fall, no trip, the
-/// walking speed after 10 s within 2 % of the belt's; at 0.30 and 0.35 m/s within ±0.15 m of
+/// Belt 0.15, 0.25, 0.30 and 0.35 m/s for 60 s with speed control, seeds 1–5: no fall, no
+/// trip, the walking speed after 10 s within 2 % of the belt's in every run (the issue's
+/// figure; 0.15 m/s since the library reaches down to 0.125 m/s, before: 104.9 % over seeds
+/// 1–5. Not 0.20 m/s: seed 1 walks 102.5 %, the mean over seeds 1–5 is 101.9 %); at 0.30 and 0.35 m/s within ±0.15 m of
 /// the centre after 10 s (measured 2026-12-05 with the treadmill config: 0.132 and 0.112 m;
 /// 0.25 m/s: 0.260 m; with the walked-speed calibration 0.132, 0.106 and 0.310 m, walked/belt
 /// at most 101.6 %; with a position gain of 0.2 /s instead of 0.17 per step, 0.160 m at
 /// 0.30 m/s; with the library down to 0.125 m/s 0.262, 0.123 and 0.111 m). Before the library's steps were capped at 0.22 m every seed tripped the step
 /// timeout at 0.35 m/s.
 #[test]
-fn the_faster_belts_ride_through_at_the_belt_speed() {
-    for v in [0.25, 0.30, 0.35] {
+fn the_belts_ride_through_at_the_belt_speed() {
+    for v in [0.15, 0.25, 0.30, 0.35] {
         for seed in SEEDS {
             let r = run_with_speed_control(&constant_belt(v, 60.0, seed));
             assert!(rides_through(&r), "{v} m/s seed {seed}: {}", outcome(&r));
@@ -203,10 +205,11 @@ fn walks_every_belt_speed_for_60_s_in_the_middle_at_the_belt_speed() {
     }
 }
 
-/// Belt 0.20 → 0.30 → 0.20 m/s: within 0.05 m/s of the belt in ≤ 8 steps after each change,
-/// within ±0.15 m of the centre throughout.
+/// Belt 0.20 → 0.30 → 0.20 m/s: within 0.05 m/s of the belt in ≤ 8 steps after each change.
+/// Measured (2026-12-05, treadmill config, the library down to 0.125 m/s with the belt-change
+/// feed-forward, seeds 1-5): up 1, 1, 2, 3, 1 and down 1, 1, 4, 1, 4 steps (seeds 6-10, not
+/// tested: up 1, 3, 1, 2, 13, down 5, 7, 16, never, 1; no stall).
 #[test]
-#[ignore = "issue #29 item 6, missed (2026-12-05, treadmill config adam_treadmill.toml, the library down to 0.125 m/s, seeds 1-5): 5 of 5 ride through; steps to match the step up 10, 11, 2, 3, 10; back down 9, 1, 8, 1, 17; |position| 0.12-0.44 m; seeds 6-10: up 1, 2, 14, 9, 16, down 12, 1, 10, 16, 1 (the library from 0.15 m/s: within 8 both ways in 8 of 10)"]
 fn follows_a_belt_step_up_and_back_within_8_steps() {
     for seed in SEEDS {
         let (o, [t1, t2]) = belt_steps(60.0, seed);
@@ -219,6 +222,17 @@ fn follows_a_belt_step_up_and_back_within_8_steps() {
                 "seed {seed} from {from} s: {n:?}"
             );
         }
+    }
+}
+
+/// Belt 0.20 → 0.30 → 0.20 m/s: within ±0.15 m of the centre throughout.
+#[test]
+#[ignore = "issue #29 item 6, missed (2026-12-05, treadmill config adam_treadmill.toml, the library down to 0.125 m/s, the belt-change feed-forward, seeds 1-5): |position| 0.244, 0.129, 0.314, 0.200, 0.170 m"]
+fn stays_within_15_cm_of_the_centre_through_a_belt_step() {
+    for seed in SEEDS {
+        let (o, _) = belt_steps(60.0, seed);
+        let r = run_with_speed_control(&o);
+        assert!(rides_through(&r), "seed {seed}: {}", outcome(&r));
         let p = max_abs_position_m(&r);
         assert!(p <= 0.15, "seed {seed}: |position| {p} m");
     }
@@ -227,14 +241,16 @@ fn follows_a_belt_step_up_and_back_within_8_steps() {
 /// −20 N and +40 N for 0.2 s at five points of the step ride through in ≥ 4 of 5 seeds.
 ///
 /// Each push run goes on to 12 s (`PUSH_WATCH_S` = 9 s after the push arms; it was 4 s, too
-/// short to see a later stall). Measured (2026-12-05, the treadmill config with the stall
-/// relaunch, seeds 1–5, ridden through at 10/30/50/70/90 %): −20 N 3, 0, 5, 5, 5 (without the
-/// relaunch 0, 0, 5, 5, 0; the relaunched walk at 10 and 30 % stalls again, then off the back of
-/// the belt or a joint limit), +40 N 0 of 5 at every point (the push carries the robot ahead, the
-/// position loop takes the library down to a slow gait whose step stalls); without a push every
-/// 12 s run walks. With the library down to 0.125 m/s: −20 N 2, 0, 4, 5, 5, +40 N 0 of 5.
+/// short to see a later stall). A run whose stalled step was relaunched from double support
+/// stalled: it does not ride through ([`rides_through`]). Measured (2026-12-05, the treadmill
+/// config with the stall relaunch, seeds 1–5, ridden through at 10/30/50/70/90 %): −20 N 0, 0,
+/// 5, 5, 0 (5, 4 and 5 more at 10, 30 and 90 % walk on after a relaunch; without the relaunch
+/// 0, 0, 5, 5, 0), +40 N 0, 1, 0, 3, 0 with the disturbance settle (before it 0 of 5 at every
+/// point: the pushed steps walk 0.40–0.76 m/s and within two or three steps one starts with too
+/// little momentum and stalls; `runtime::control::speed`, "Forward pushes"); without a push every
+/// 12 s run walks. With the library down to 0.125 m/s: −20 N 0, 0, 4, 5, 0, +40 N 0 of 5.
 #[test]
-#[ignore = "issue #29 item 6: watched to 12 s, -20 N rides through 2, 0, 4, 5, 5 of 5 and +40 N 0 of 5 at every point (2026-12-05, treadmill config with the library down to 0.125 m/s, seeds 1-5; the library from 0.15 m/s: 3, 0, 5, 5, 5 and 0)"]
+#[ignore = "issue #29 item 6: watched to 12 s, a stall relaunch counted as a stall, -20 N rides through 0, 0, 4, 5, 0 of 5 and +40 N 0 of 5 at 10/30/50/70/90 % (2026-12-05, treadmill config with the disturbance settle and the library down to 0.125 m/s, seeds 1-5; with the library from 0.15 m/s +40 N 0, 1, 0, 3, 0)"]
 fn rides_through_pushes_at_every_point_of_the_step() {
     for force in PUSH_FORCES_N {
         for phase in PUSH_PHASES {

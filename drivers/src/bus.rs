@@ -243,7 +243,8 @@ impl ExchangeReport {
 /// Implementations: [`crate::sim::bus::SimBus`] (simulated firmware behind the real codec),
 /// [`crate::socketcan_bus::SocketCanBus`] (Linux SocketCAN) and [`crate::udp::UdpBus`] (CAN over
 /// UDP, cannelloni's format), the last two one [`crate::frame_bus::FrameBus`] over their
-/// transports. All pass [`crate::conformance`].
+/// transports. All pass [`crate::conformance`]. A wrapper of another bus (a fault injector, a
+/// recorder) implements [`BusWrapper`] instead and gets this trait by forwarding.
 pub trait MotorBus {
     /// Current lifecycle state.
     fn state(&self) -> Lifecycle;
@@ -278,6 +279,62 @@ pub trait MotorBus {
     /// nothing: the runtime logs them every tick.
     fn frames(&self) -> &[crate::frame_log::LoggedFrame] {
         &[]
+    }
+}
+
+/// A [`MotorBus`] that wraps another and forwards to it (a fault injector, a recorder, a bus
+/// paired with an IMU): implement this and the blanket impl makes the wrapper a `MotorBus` that
+/// forwards every method to [`BusWrapper::inner`], the exchange through
+/// [`BusWrapper::wrapped_exchange`] (override it to act around the inner bus's). Static
+/// dispatch: the wrapper adds nothing to the exchange that it does not write itself.
+pub trait BusWrapper {
+    /// The wrapped bus.
+    type Inner: MotorBus;
+
+    /// The wrapped bus.
+    fn inner(&self) -> &Self::Inner;
+
+    /// The wrapped bus, mutable.
+    fn inner_mut(&mut self) -> &mut Self::Inner;
+
+    /// The wrapper's [`MotorBus::exchange`]: by default the inner bus's. Allocates nothing
+    /// (an override must not either, outside tests and tools).
+    fn wrapped_exchange(
+        &mut self,
+        commands: &[Command],
+        replies: &mut [Reply],
+        budget: Duration,
+    ) -> Result<ExchangeReport> {
+        self.inner_mut().exchange(commands, replies, budget)
+    }
+}
+
+impl<W: BusWrapper> MotorBus for W {
+    fn state(&self) -> Lifecycle {
+        self.inner().state()
+    }
+    fn bus_count(&self) -> usize {
+        self.inner().bus_count()
+    }
+    fn configure(&mut self, motors: &[MotorSpec]) -> Result<()> {
+        self.inner_mut().configure(motors)
+    }
+    fn activate(&mut self) -> Result<()> {
+        self.inner_mut().activate()
+    }
+    fn exchange(
+        &mut self,
+        commands: &[Command],
+        replies: &mut [Reply],
+        budget: Duration,
+    ) -> Result<ExchangeReport> {
+        self.wrapped_exchange(commands, replies, budget)
+    }
+    fn deactivate(&mut self) -> Result<()> {
+        self.inner_mut().deactivate()
+    }
+    fn frames(&self) -> &[crate::frame_log::LoggedFrame] {
+        self.inner().frames()
     }
 }
 

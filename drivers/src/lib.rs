@@ -8,7 +8,7 @@
 //! |---|---|
 //! | [`a1`] | sans-IO A1-over-CAN codec: frame table, ids, fixed-point fields; `a1_can.dbc` |
 //! | [`timing`] | CAN bus time of A1 traffic; `validate(rate, motors per bus, bitrate)` |
-//! | [`bus`] | the [`bus::MotorBus`] trait: configure → activate → exchange → deactivate, `Drop` = damping |
+//! | [`bus`] | the [`bus::MotorBus`] trait: configure → activate → exchange → deactivate, `Drop` = damping; [`bus::BusWrapper`] for a bus that wraps another |
 //! | [`socketcan_bus`] | `MotorBus` on Linux SocketCAN, one interface per limb |
 //! | [`udp`] | `MotorBus` over CAN-over-UDP links in cannelloni's packet format (sans-IO codec, [`udp::UdpBus`]), and [`udp::serve`]: a `SimBus` served over them (`adam emulate motors`) |
 //! | [`frame_log`] | the CAN frames of a bus's last operation (bus, direction, id, data, time), which every `MotorBus` hands to the runtime's log |

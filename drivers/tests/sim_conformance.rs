@@ -3,8 +3,8 @@
 #![allow(clippy::unwrap_used)]
 
 use core::time::Duration;
-use drivers::a1::{Frame, MotorId};
-use drivers::bus::MotorSpec;
+use drivers::a1::{Command, Frame, MotorId, Reply};
+use drivers::bus::{BusWrapper, ExchangeReport, MotorBus, MotorSpec};
 use drivers::conformance::{Harness, HoldCheck};
 use drivers::sim::bus::{SimBus, SimConfig};
 use drivers::sim::firmware::{A1Model, SimMotor};
@@ -98,4 +98,76 @@ drivers::motor_bus_conformance!(sim_bus, harness);
 #[test]
 fn run_all_reports_no_failure() {
     assert_eq!(drivers::conformance::run_all(&mut harness()), vec![]);
+}
+
+/// A bus wrapping a `SimBus` through [`BusWrapper`] (as the runtime's fault injector does),
+/// counting its exchanges.
+struct Counting<B> {
+    bus: B,
+    exchanges: usize,
+}
+
+impl<B: MotorBus> BusWrapper for Counting<B> {
+    type Inner = B;
+    fn inner(&self) -> &B {
+        &self.bus
+    }
+    fn inner_mut(&mut self) -> &mut B {
+        &mut self.bus
+    }
+    fn wrapped_exchange(
+        &mut self,
+        commands: &[Command],
+        replies: &mut [Reply],
+        budget: Duration,
+    ) -> drivers::bus::Result<ExchangeReport> {
+        self.exchanges += 1;
+        self.bus.exchange(commands, replies, budget)
+    }
+}
+
+/// [`SimHarness`] with each bus wrapped in [`Counting`].
+struct WrappedHarness(SimHarness);
+
+impl Harness for WrappedHarness {
+    type Bus = Counting<SimBus<InertiaDampingPlant>>;
+    fn new_bus(&mut self) -> Self::Bus {
+        Counting {
+            bus: self.0.new_bus(),
+            exchanges: 0,
+        }
+    }
+    fn motors(&self) -> Vec<MotorSpec> {
+        self.0.motors()
+    }
+    fn absent_motor(&self) -> MotorSpec {
+        self.0.absent_motor()
+    }
+    fn take_sent_frames(&mut self) -> Vec<Frame> {
+        self.0.take_sent_frames()
+    }
+    fn budget(&self) -> Duration {
+        self.0.budget()
+    }
+    fn hold(&self) -> HoldCheck {
+        self.0.hold()
+    }
+}
+
+#[test]
+fn a_bus_wrapper_forwards_every_method_and_passes_the_suite() {
+    assert_eq!(
+        drivers::conformance::run_all(&mut WrappedHarness(harness())),
+        vec![]
+    );
+    let mut h = WrappedHarness(harness());
+    let mut bus = h.new_bus();
+    bus.configure(&h.motors()).unwrap();
+    bus.activate().unwrap();
+    assert_eq!(bus.frames(), bus.bus.frames());
+    let commands = [Command::damping(h.motors()[0].id, 1.0)];
+    let mut replies = [Reply::zeroed(commands[0].motor)];
+    bus.exchange(&commands, &mut replies, h.budget()).unwrap();
+    assert_eq!(bus.exchanges, 1);
+    assert_eq!(bus.state(), bus.bus.state());
 }

@@ -24,7 +24,7 @@
 
 use core::time::Duration;
 use drivers::a1::{Command, Reply};
-use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
+use drivers::bus::{BusWrapper, ExchangeReport, MotorBus};
 use drivers::imu::{Imu, ImuError, ImuSample};
 use drivers::sim::bus::SimBus;
 use drivers::sim::robot::{RobotSim, SimEvent};
@@ -51,20 +51,16 @@ struct Recorder {
     progress: WalkProgress,
 }
 
-impl MotorBus for Recorder {
-    fn state(&self) -> Lifecycle {
-        self.bus.state()
+/// The simulator's bus, each exchange recorded (with the simulator's truth).
+impl BusWrapper for Recorder {
+    type Inner = SimBus<RobotSim>;
+    fn inner(&self) -> &Self::Inner {
+        &self.bus
     }
-    fn bus_count(&self) -> usize {
-        self.bus.bus_count()
+    fn inner_mut(&mut self) -> &mut Self::Inner {
+        &mut self.bus
     }
-    fn configure(&mut self, motors: &[MotorSpec]) -> drivers::bus::Result<()> {
-        self.bus.configure(motors)
-    }
-    fn activate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.activate()
-    }
-    fn exchange(
+    fn wrapped_exchange(
         &mut self,
         commands: &[Command],
         replies: &mut [Reply],
@@ -81,9 +77,6 @@ impl MotorBus for Recorder {
             phase: self.progress.phase,
         });
         r
-    }
-    fn deactivate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.deactivate()
     }
 }
 

@@ -6,9 +6,7 @@
 //!   is itself a backend ([`crate::sim::run`]);
 //! * tests: [`WithImu`] of a `SimBus<InertiaDampingPlant>` and a [`StaticImu`].
 
-use core::time::Duration;
-use drivers::a1::{Command, Reply};
-use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
+use drivers::bus::{BusWrapper, MotorBus};
 use drivers::imu::{Imu, ImuError, ImuSample};
 
 /// What the loop runs on: the motors ([`MotorBus`]) and the torso IMU ([`Imu`]) of one robot,
@@ -92,32 +90,13 @@ pub struct WithImu<B, I> {
     pub imu: I,
 }
 
-impl<B: MotorBus, I> MotorBus for WithImu<B, I> {
-    fn state(&self) -> Lifecycle {
-        self.bus.state()
+impl<B: MotorBus, I> BusWrapper for WithImu<B, I> {
+    type Inner = B;
+    fn inner(&self) -> &B {
+        &self.bus
     }
-    fn bus_count(&self) -> usize {
-        self.bus.bus_count()
-    }
-    fn configure(&mut self, motors: &[MotorSpec]) -> drivers::bus::Result<()> {
-        self.bus.configure(motors)
-    }
-    fn activate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.activate()
-    }
-    fn exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> drivers::bus::Result<ExchangeReport> {
-        self.bus.exchange(commands, replies, budget)
-    }
-    fn deactivate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.deactivate()
-    }
-    fn frames(&self) -> &[drivers::frame_log::LoggedFrame] {
-        self.bus.frames()
+    fn inner_mut(&mut self) -> &mut B {
+        &mut self.bus
     }
 }
 

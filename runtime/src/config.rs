@@ -194,6 +194,10 @@ pub struct WalkConfig {
     pub stop_step_length_m: f64,
 }
 
+/// The most IMU samples `estimator.encoder_lag_samples` may give: the pitch estimator keeps
+/// that many past estimates.
+pub const MAX_ENCODER_LAG_SAMPLES: u32 = 3;
+
 /// Torso pitch estimator (see [`crate::estimator`]).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -216,6 +220,19 @@ pub struct EstimatorConfig {
     /// flat ground), rad.
     #[serde(default = "default_touchdown_pitch_sigma_rad")]
     pub touchdown_pitch_sigma_rad: f64,
+    /// How many IMU samples older the joint encoders' sample is than the IMU sample of the same
+    /// tick (0 ..= [`MAX_ENCODER_LAG_SAMPLES`]): the legs' pitch is
+    /// compared with the estimate of that time. The simulated bus: 1 (its replies sample the
+    /// robot at the start of the exchange, its IMU at the end of the period). 0 if absent.
+    #[serde(default)]
+    pub encoder_lag_samples: u32,
+    /// Measure the legs' pitch again at the first tick after a touchdown's impact, with the new
+    /// stance foot down and the old one just lifting (each of the two with σ·√2): the landing
+    /// foot is still above the ground at the encoders' sample of the impact tick, the old
+    /// stance foot already above it at the next, and the two errors have opposite signs. Off if
+    /// absent.
+    #[serde(default)]
+    pub touchdown_after_impact: bool,
 }
 
 fn default_max_implausible_imu_samples() -> u32 {
@@ -674,6 +691,13 @@ impl RuntimeConfig {
             "estimator.touchdown_pitch_sigma_rad",
             e.touchdown_pitch_sigma_rad,
         )?;
+        if e.encoder_lag_samples > MAX_ENCODER_LAG_SAMPLES {
+            return Err(bad(
+                "estimator.encoder_lag_samples",
+                e.encoder_lag_samples.to_string(),
+                "must be at most 3 (IMU samples)",
+            ));
+        }
         self.speed.validate(origin)?;
         self.orbit.validate(origin)?;
         self.calibration.validate(origin)?;

@@ -27,10 +27,50 @@
 //! `runtime::sim::scenarios`). Not without a treadmill: there it changed a marginal launch
 //! (`runtime/tests/restart_sim.rs`, one gait, seed 1: 10 steps in 11.9 s, 12 required).
 //!
+//! # The touchdown pitch (measured 2026-12-05, issue #29)
+//! The legs' pitch is a measurement of the pitch at the time of the joint encoders' sample,
+//! and it levels the feet, which are level only at the impact itself. On the simulated bus
+//! neither holds at the tick that sees the impact: the replies sample the robot at the start
+//! of the exchange, the IMU after the control period (`drivers::sim::bus`), so the IMU's
+//! sample is one period newer than the encoders', and the accelerometer's impact spike is the
+//! mean over that period, so the impact falls between the two samples and the landing foot is
+//! still 0.01–0.16 mm above the ground at the encoders' one. Measured with the simulator's
+//! truth (`cargo run --release -p runtime --example pitch_probe -- configs/runtime/adam.toml
+//! GAIT V 40 1 est`, each library gait alone at its belt speed V, detections after 10 s):
+//! the legs' pitch minus the true pitch at the IMU's sample, what the filter compared it with,
+//! is +1.4 to +1.5 mrad at 0.20–0.30 m/s (+0.5 at 0.35): +0.4 from the landing foot's height
+//! and +1.0 to +1.1 from the torso turning (−1 rad/s) in the period between the two samples;
+//! at the first sample after the impact (the new stance foot down, the old one lifting) it
+//! is −0.4 to −0.55 mrad against the truth of its own encoders' sample. Where in the period the
+//! impact falls is random, so the offset scatters from step to step (0.9 to 2.2 mrad at
+//! 0.225 m/s), and the filter, whose loop per step is slow (its Riccati equation iterated per
+//! step, 0.7 s steps, the shipped noises: steady-state gains 0.29 and −0.070 /s, error poles
+//! 0.84 at ±9.8°, a period of some 37 steps), turns the scatter into a slow wander of the bias
+//! estimate and the pitch.
+//! That wander is what moves the walked speed of the slow gaits (`runtime::control::speed`,
+//! "Why the library speed does not set the walked speed").
+//!
+//! Two settings (both off unless the config says so) remove the bias and most of the
+//! scatter: `estimator.encoder_lag_samples` (1 on the simulated bus) compares the legs' pitch
+//! with the estimate of the encoders' time ([`PitchEstimator::measure_pitch_lagged`], the
+//! last [`MAX_MEASUREMENT_LAG_SAMPLES`] estimates kept), and `estimator.touchdown_after_impact`
+//! measures again at the next tick, after the impact, whose error has the other sign (each of
+//! the two with σ·√2). With both, 0.225 m/s gait, seed 1, 40 s: pitch RMS against the truth
+//! 0.058° (0.137° without), its steps 0.577–0.605 s after 10 s (0.615–0.699 s without). They
+//! stay off in the shipped configs: unbiased, the slow gaits walk far faster than planned
+//! (the measurements and why: `runtime::control::speed`, "The pitch estimate drives the slow
+//! wander"). The demo's gait so corrected (`adam run --backend sim --duration 30s` with
+//! `adam.toml` plus the two settings) walks 0.2168 m/s against its 0.1667 m/s plan and off
+//! the front of the belt at 14.6 s (pitch RMS 0.044°; shipped: 30 s, 0.1642 m/s, 0.109°).
+//!
 //! Allocation-free, `Copy`; time is an argument (`dt_s`).
 
 /// Standard gravity, m/s².
 pub const GRAVITY_MPS2: f64 = 9.80665;
+
+/// The most IMU samples a direct pitch measurement may lag the latest one
+/// ([`PitchEstimator::measure_pitch_lagged`]).
+pub const MAX_MEASUREMENT_LAG_SAMPLES: usize = crate::config::MAX_ENCODER_LAG_SAMPLES as usize;
 
 /// Noise model of the filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,6 +105,9 @@ pub struct PitchEstimator {
     bias_rad_s: f64,
     rate_rad_s: f64,
     p: [[f64; 2]; 2],
+    /// The pitch estimate at the last IMU samples' times, newest first (`[0]` is `pitch_rad`),
+    /// each moved by every later correction: what a lagged measurement is compared with.
+    history_rad: [f64; MAX_MEASUREMENT_LAG_SAMPLES + 1],
 }
 
 impl PitchEstimator {
@@ -78,6 +121,7 @@ impl PitchEstimator {
             rate_rad_s: 0.0,
             // Initial uncertainty: pitch from one accel sample; bias up to ~0.1 rad/s.
             p: [[params.accel_pitch_noise_rad.powi(2), 0.0], [0.0, 0.01]],
+            history_rad: [0.0; MAX_MEASUREMENT_LAG_SAMPLES + 1],
         }
     }
 
@@ -86,6 +130,7 @@ impl PitchEstimator {
     /// `pitch_sigma_rad` is how well that pitch is known.
     pub fn initialize(&mut self, pitch_rad: f64, rate_rad_s: f64, pitch_sigma_rad: f64) {
         self.pitch_rad = pitch_rad;
+        self.history_rad = [pitch_rad; MAX_MEASUREMENT_LAG_SAMPLES + 1];
         self.rate_rad_s = rate_rad_s;
         self.p[0] = [pitch_sigma_rad * pitch_sigma_rad, 0.0];
         self.p[1][0] = 0.0;
@@ -127,11 +172,22 @@ impl PitchEstimator {
     /// which also corrects the bias through the cross covariance. Ignored before the first
     /// sample, for a non-finite value, and as an outlier beyond 4σ of the innovation.
     pub fn measure_pitch(&mut self, pitch_rad: f64, sigma_rad: f64) {
+        self.measure_pitch_lagged(pitch_rad, sigma_rad, 0);
+    }
+
+    /// [`Self::measure_pitch`] for a pitch that held `lag_samples` IMU samples before the latest
+    /// one (at most [`MAX_MEASUREMENT_LAG_SAMPLES`]; more is taken as that many): the joint
+    /// encoders' sample is older than the IMU's on the simulated bus (`runtime::estimator`,
+    /// "The touchdown pitch"). The innovation is taken against the estimate of that time; the
+    /// correction moves the estimate now (a lag of a few milliseconds: the covariance of the
+    /// latest sample stands in for that of the older one).
+    pub fn measure_pitch_lagged(&mut self, pitch_rad: f64, sigma_rad: f64, lag_samples: usize) {
         if !self.initialized || !pitch_rad.is_finite() || !sigma_rad.is_finite() || sigma_rad <= 0.0
         {
             return;
         }
-        let innovation = wrap_pi(pitch_rad - self.pitch_rad);
+        let then_rad = self.history_rad[lag_samples.min(MAX_MEASUREMENT_LAG_SAMPLES)];
+        let innovation = wrap_pi(pitch_rad - then_rad);
         let r = sigma_rad * sigma_rad;
         // Outlier gate: a measurement more than 4σ of the innovation away is rejected.
         if innovation * innovation > 16.0 * (self.p[0][0] + r) {
@@ -145,6 +201,9 @@ impl PitchEstimator {
         let k0 = self.p[0][0] / s;
         let k1 = self.p[1][0] / s;
         self.pitch_rad += k0 * innovation;
+        for h in &mut self.history_rad {
+            *h += k0 * innovation;
+        }
         self.bias_rad_s += k1 * innovation;
         let [[a, b], [_, d]] = self.p;
         self.p = [
@@ -183,6 +242,7 @@ impl PitchEstimator {
                 return false;
             }
             self.pitch_rad = theta_acc;
+            self.history_rad = [theta_acc; MAX_MEASUREMENT_LAG_SAMPLES + 1];
             self.rate_rad_s = gyro_pitch_rad_s;
             self.initialized = true;
             return true;
@@ -191,6 +251,9 @@ impl PitchEstimator {
         // Predict.
         self.rate_rad_s = gyro_pitch_rad_s - self.bias_rad_s;
         self.pitch_rad += self.rate_rad_s * dt;
+        self.history_rad
+            .copy_within(0..MAX_MEASUREMENT_LAG_SAMPLES, 1);
+        self.history_rad[0] = self.pitch_rad;
         let p = self.p;
         let q_theta = (self.params.gyro_noise_rad_s * dt).powi(2);
         let q_bias = self.params.gyro_bias_walk_rad_s_per_sqrt_s.powi(2) * dt;
@@ -346,5 +409,38 @@ mod tests {
         assert_eq!(est.pitch_rad(), before);
         est.measure_pitch(f64::NAN, 0.01);
         assert_eq!(est.pitch_rad(), before);
+    }
+
+    /// The torso turning at 1 rad/s, the legs' pitch taken one IMU sample before the IMU's (the
+    /// simulated bus): compared with the estimate of its own time it leaves the estimate where
+    /// it is; compared with the latest estimate (lag 0) it pulls it back by a sample's turn.
+    #[test]
+    fn a_lagged_measurement_is_compared_with_the_estimate_of_its_time() {
+        let (dt, rate) = (1e-3, -1.0);
+        for (lag, pull_rad) in [(1, 0.0), (0, -rate * dt)] {
+            let mut est = PitchEstimator::new(params());
+            est.initialize(0.0, rate, 0.01);
+            for k in 1..=100 {
+                est.update_with(rate, 0.0, GRAVITY_MPS2, dt, false);
+                let truth = rate * dt * k as f64;
+                assert!((est.pitch_rad() - truth).abs() < 1e-12);
+                // The legs measured the pitch one sample ago, exactly.
+                let before = est.pitch_rad();
+                est.measure_pitch_lagged(truth - rate * dt, 1e-6, lag);
+                assert!(
+                    (est.pitch_rad() - before - pull_rad).abs() < 1e-9,
+                    "lag {lag}: moved {} rad",
+                    est.pitch_rad() - before
+                );
+                if lag == 0 {
+                    break;
+                }
+            }
+        }
+        // A lag beyond the history is taken as the longest it keeps.
+        let mut est = PitchEstimator::new(params());
+        est.initialize(0.0, 0.0, 0.01);
+        est.measure_pitch_lagged(0.0, 0.01, 99);
+        assert_eq!(est.pitch_rad(), 0.0);
     }
 }

@@ -22,6 +22,8 @@ use serde::{Deserialize, Serialize};
 /// Δℓ    = clamp(g · (v_k − v_cmd), ± max_step_offset_m)   (the next step lands Δℓ longer:
 ///         g = step_length_gain_s after a fast step,        the step lever)
 ///             slow_step_length_gain_s after a slow one
+/// a step with |v_k − b − offset| > disturbance_settle_mps: for disturbance_settle_steps
+///         impacts v_cmd = max(b + offset, v_k − max_change_per_step_mps), no lever, no I
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -116,6 +118,18 @@ pub struct SpeedConfig {
     /// `first_step_unlimited` after a Walk from Stand) and the integral starts again from 0.
     #[serde(default)]
     pub belt_change_unlimited_mps: f64,
+    /// A disturbance (a push) seen at an impact: a step whose speed departs from the
+    /// operator's (belt + offset) by more than this, m/s, starts a settle (0, the default:
+    /// off). For `disturbance_settle_steps` impacts after the last such step the reference
+    /// follows the estimate, the step lever and the integral rest, and the command follows the
+    /// robot down: the last step's speed less `max_change_per_step_mps`, never below the
+    /// operator's (the first such impact sets σ without the step limit); then the reference
+    /// glides back at `reference_glide_mps` (`runtime::control::speed`, "Forward pushes").
+    #[serde(default)]
+    pub disturbance_settle_mps: f64,
+    /// ... for this many impacts.
+    #[serde(default)]
+    pub disturbance_settle_steps: u32,
     /// A Stop on a moving belt first walks to this far ahead of the centre, m (0, the default:
     /// it brakes at once): the robot then stands longer before the belt carries it off the back.
     #[serde(default)]
@@ -171,6 +185,8 @@ impl Default for SpeedConfig {
             belt_start_settle_steps: 0,
             reference_glide_mps: 0.0,
             belt_change_unlimited_mps: 0.0,
+            disturbance_settle_mps: 0.0,
+            disturbance_settle_steps: 0,
             stop_ahead_m: 0.0,
             stop_approach_mps: 0.0,
             stop_library_mps: 0.0,
@@ -217,6 +233,7 @@ impl SpeedConfig {
                 "speed.belt_change_unlimited_mps",
                 self.belt_change_unlimited_mps,
             ),
+            ("speed.disturbance_settle_mps", self.disturbance_settle_mps),
             ("speed.stop_ahead_m", self.stop_ahead_m),
             ("speed.stop_approach_mps", self.stop_approach_mps),
             ("speed.stop_library_mps", self.stop_library_mps),

@@ -129,6 +129,20 @@ fn errors_name_field_and_value() {
         e.contains("safety.max_pitch_rad") && e.contains("NaN"),
         "{e}"
     );
+    // The estimator keeps the last 4 estimates: a lag of 3 samples at most.
+    let lag = |n: u32| {
+        let field = format!("touchdown_pitch_sigma_rad = 0.01\nencoder_lag_samples = {n}");
+        RuntimeConfig::from_toml(
+            &shipped().replace("touchdown_pitch_sigma_rad = 0.01", &field),
+            "x.toml",
+        )
+    };
+    assert_eq!(lag(3).unwrap().estimator.encoder_lag_samples, 3);
+    let e = lag(4).unwrap_err().to_string();
+    assert!(
+        e.contains("estimator.encoder_lag_samples") && e.contains('4'),
+        "{e}"
+    );
     let text = shipped().replace("[telemetry]", "[telemetry]\nbogus = 1");
     let e = RuntimeConfig::from_toml(&text, "x.toml")
         .unwrap_err()

@@ -76,6 +76,7 @@ use crate::estimator::{EstimatorParams, PitchEstimator};
 use crate::safety::{ProgressWatch, SafetyInput, SafetyMonitor, Trip};
 use crate::slots::{MotorSample, SlotLayout, LEG_SLOTS, OUTPUTS, SLOTS};
 use crate::{Result, RuntimeError};
+use core::f64::consts::SQRT_2;
 use drivers::imu::ImuSample;
 use model::gait::GaitFile;
 use model::robot::{Legs, MAX_DOF};
@@ -124,6 +125,11 @@ pub struct Controller {
     estimator: PitchEstimator,
     accel_while_walking: bool,
     touchdown_pitch_sigma_rad: f64,
+    /// IMU samples the encoders' sample lags (`estimator.encoder_lag_samples`).
+    encoder_lag_samples: usize,
+    touchdown_after_impact: bool,
+    /// The impact's tick measured the legs' pitch: measure it again at the next tick.
+    pitch_after_impact_due: bool,
     safety: SafetyMonitor,
     // Run-time state.
     state: ControlState,
@@ -296,6 +302,9 @@ impl Controller {
             estimator: PitchEstimator::new(EstimatorParams::from(&config.estimator)),
             accel_while_walking: config.estimator.accel_while_walking,
             touchdown_pitch_sigma_rad: config.estimator.touchdown_pitch_sigma_rad,
+            encoder_lag_samples: config.estimator.encoder_lag_samples as usize,
+            touchdown_after_impact: config.estimator.touchdown_after_impact,
+            pitch_after_impact_due: false,
             safety: SafetyMonitor::new(
                 config.safety.clone(),
                 config.loop_.max_overrun_streak,
@@ -525,9 +534,14 @@ impl Controller {
         // accelerometer's gravity (`runtime::estimator`).
         if self.state == ControlState::Stand && self.stand_hold.is_none() && self.regulator.active()
         {
-            let pitch = self.touchdown_pitch_rad(&leg_q);
-            self.estimator
-                .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad);
+        }
+        // The tick after an impact: the legs' pitch again, the new stance foot down, the old
+        // one just lifting (its error has the other sign of the impact tick's).
+        if std::mem::take(&mut self.pitch_after_impact_due)
+            && matches!(self.state, ControlState::Walk | ControlState::Stop)
+        {
+            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad * SQRT_2);
         }
         // Operator, then safety (a trip overrides any request).
         if let Some(cmd) = input.operator {
@@ -600,7 +614,9 @@ impl Controller {
                     self.launch_requested = false;
                     self.begin_launch(t, FROM_STAND, &leg_q, &leg_dq);
                 }
-                if self.launch.is_some_and(|l| t - l.start_t_s < l.duration_s)
+                if self
+                    .launch
+                    .is_some_and(|l| t - l.start_t_s < l.timing.duration_s)
                     && !self.launch_on_orbit(t, &leg_q, &leg_dq)
                 {
                     self.launch_commands(t, &leg_q, &leg_dq, &mut out.commands);
@@ -660,9 +676,14 @@ impl Controller {
                 }
                 if impact_switch || self.touchdown_ticks >= self.touchdown_debounce_ticks {
                     if impact_switch {
-                        let pitch = self.touchdown_pitch_rad(&leg_q);
-                        self.estimator
-                            .measure_pitch(pitch, self.touchdown_pitch_sigma_rad);
+                        // Halved in weight if the next tick measures again.
+                        let twice = if self.touchdown_after_impact {
+                            SQRT_2
+                        } else {
+                            1.0
+                        };
+                        self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad * twice);
+                        self.pitch_after_impact_due = self.touchdown_after_impact;
                     }
                     // The step that ends: its length (feet at the impact) and duration.
                     let step_length_m = self.feet_offset_at(self.estimator.pitch_rad(), &leg_q)[0];
@@ -796,7 +817,7 @@ impl Controller {
     /// the library gait `speed.launch_gait_fraction` of the way from the Stand gait to the one
     /// that walks the belt's speed (`runtime::control::speed`, "Start and restart").
     fn launch_gait(&mut self) {
-        let fraction = self.regulator.start_settings().launch_gait_fraction;
+        let fraction = self.regulator.config().launch_gait_fraction;
         let Some(library) = &self.library else {
             return;
         };

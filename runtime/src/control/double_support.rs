@@ -361,6 +361,33 @@ impl Geometry<'_> {
             .ok()
     }
 
+    /// Angular momentum σ about the `stance` foot of the robot at `q` moving at `dq`, the base's
+    /// rates replaced by those that keep that foot still, kg·m²/s, and where that foot is
+    /// (x, z), m. `None` if the kinematics fail. The walk's measured σ (`orbit`) and the
+    /// planned orbit's I(θ) (`orbit_table`) both come from here.
+    pub fn pinned_momentum(
+        &self,
+        stance: Side,
+        q: &[f64; MAX_DOF],
+        dq: &[f64; MAX_DOF],
+    ) -> Option<(f64, [f64; 2])> {
+        let dof = self.dof;
+        let mut v = *dq;
+        v[0] = 0.0;
+        v[1] = 0.0;
+        let foot = self.legs.side(stance).foot;
+        let st = self.model.body_states(&q[..dof], &v[..dof]).ok()?;
+        let p = self.model.frame_position_in(&st, foot);
+        let vf = self.model.frame_velocity_in(&st, foot);
+        v[0] = -vf[0];
+        v[1] = -vf[1];
+        let sigma = self
+            .model
+            .angular_momentum_about(&q[..dof], &v[..dof], p)
+            .ok()?;
+        Some((sigma, p))
+    }
+
     /// Leg joint torques that hold the robot still in double support at (`pose`, `leg_q`)
     /// against gravity, N·m (model direction, by leg slot): the torques of the smallest contact
     /// forces that balance the torso's three equations. `None` if the kinematics fail.

@@ -128,27 +128,6 @@ pub(super) struct OrbitTable {
     pub(super) kappa: [f64; ORBIT_SAMPLES],
 }
 
-/// σ about the stance foot of `stance` for pose `q` and rates `dq`, kg·m²/s (the base's
-/// rates are replaced by those that keep the foot still). `None` if the kinematics fails.
-pub(super) fn pinned(
-    g: &Geometry,
-    q: &[f64; MAX_DOF],
-    dq: &[f64; MAX_DOF],
-    stance: Side,
-) -> Option<f64> {
-    let dof = g.dof;
-    let mut v = *dq;
-    v[0] = 0.0;
-    v[1] = 0.0;
-    let foot = g.legs.side(stance).foot;
-    let st = g.model.body_states(&q[..dof], &v[..dof]).ok()?;
-    let p = g.model.frame_position_in(&st, foot);
-    let vf = g.model.frame_velocity_in(&st, foot);
-    v[0] = -vf[0];
-    v[1] = -vf[1];
-    g.model.angular_momentum_about(&q[..dof], &v[..dof], p).ok()
-}
-
 /// The pose on the gait's outputs at phase `tau` for `stance`, the hips offset by `lean_rad`
 /// (times the outputs' `lean` pattern): joints at y^d(τ), pitch such that the stance leg is at
 /// θ(τ). `None` if Newton does not converge.
@@ -212,7 +191,8 @@ impl OrbitTable {
         let mut dq0 = [0.0; MAX_DOF];
         q0[..g.dof].copy_from_slice(&init.q);
         dq0[..g.dof].copy_from_slice(&init.dq);
-        let sigma0 = pinned(g, &q0, &dq0, stance)
+        let (sigma0, _) = g
+            .pinned_momentum(stance, &q0, &dq0)
             .ok_or_else(|| bad("the initial state's kinematics failed".into()))?;
         let mass_g = g.model.total_mass_kg() * g.model.gravity_mps2;
         let mut kappa = [0.0; ORBIT_SAMPLES];

@@ -165,15 +165,7 @@ pub(super) fn manifold_point(
         .ok()?;
     dq[2] = (1.0 - joint_rate) / slope;
     // The stance foot still: the whole robot translates so that its velocity vanishes.
-    let st = model.body_states(&q[..dof], &dq[..dof]).ok()?;
-    let foot_frame = geometry.legs.side(stance).foot;
-    let foot = model.frame_position_in(&st, foot_frame);
-    let v = model.frame_velocity_in(&st, foot_frame);
-    dq[0] = -v[0];
-    dq[1] = -v[1];
-    let inertia = model
-        .angular_momentum_about(&q[..dof], &dq[..dof], foot)
-        .ok()?;
+    let (inertia, foot) = geometry.pinned_momentum(stance, &q, &dq)?;
     let com = model.center_of_mass(&q[..dof]).ok()?;
     Some((inertia, com[0] - foot[0]))
 }

@@ -149,10 +149,9 @@ pub(super) const FROM_STAND: LaunchTiming = LaunchTiming {
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Launch {
     pub(super) start_t_s: f64,
-    /// The quintic's duration, s ([`LAUNCH_DURATION_S`] from Stand; a relaunch is quicker).
-    pub(super) duration_s: f64,
-    /// The hand-over onto the orbit comes no sooner than this far into it, s.
-    pub(super) earliest_s: f64,
+    /// The quintic's duration and the earliest hand-over onto the orbit ([`FROM_STAND`] from
+    /// Stand; a relaunch is quicker).
+    pub(super) timing: LaunchTiming,
     pub(super) from: TorsoPose,
     /// The torso's rate at the start (zero from Stand: at rest), m/s, m/s, rad/s.
     pub(super) from_rate: TorsoPose,

@@ -9,7 +9,7 @@ use crate::sim::faults::{Fault, FaultProfile, ScheduledFault};
 use crate::{Result, RuntimeError, Setup};
 use core::time::Duration;
 use drivers::a1::{Command, ErrorFlags, MotorId, Reply};
-use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
+use drivers::bus::{BusWrapper, ExchangeReport, MotorBus};
 use drivers::imu::{Imu, ImuError, ImuFault, ImuSample};
 use drivers::sim::bus::SimBus;
 use drivers::sim::robot::RobotSim;
@@ -231,20 +231,16 @@ impl FaultySim {
     }
 }
 
-impl MotorBus for FaultySim {
-    fn state(&self) -> Lifecycle {
-        self.bus.state()
+/// The simulator's bus, the faults due applied before each exchange.
+impl BusWrapper for FaultySim {
+    type Inner = SimBus<RobotSim>;
+    fn inner(&self) -> &Self::Inner {
+        &self.bus
     }
-    fn bus_count(&self) -> usize {
-        self.bus.bus_count()
+    fn inner_mut(&mut self) -> &mut Self::Inner {
+        &mut self.bus
     }
-    fn configure(&mut self, motors: &[MotorSpec]) -> drivers::bus::Result<()> {
-        self.bus.configure(motors)
-    }
-    fn activate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.activate()
-    }
-    fn exchange(
+    fn wrapped_exchange(
         &mut self,
         commands: &[Command],
         replies: &mut [Reply],
@@ -253,12 +249,6 @@ impl MotorBus for FaultySim {
         let t_s = self.bus.time_s();
         self.apply(t_s);
         self.bus.exchange(commands, replies, budget)
-    }
-    fn deactivate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.deactivate()
-    }
-    fn frames(&self) -> &[drivers::frame_log::LoggedFrame] {
-        self.bus.frames()
     }
 }
 

@@ -16,8 +16,8 @@ use super::report::SimWalkReport;
 use super::run::{walk, SimWalkOptions};
 use super::scenarios::{
     belt_steps, constant_belt, max_abs_position_after_m, max_abs_position_m, outcome,
-    push_at_phase, rides_through, speed_ratio_after, start_restart, steps_to_match, Restart,
-    SETTLE_S,
+    push_at_phase, rides_through, speed_ratio_after, start_restart, steps_to_match, walks_on,
+    Restart, SETTLE_S,
 };
 use crate::{Result, Setup};
 use serde::{Deserialize, Serialize};
@@ -96,6 +96,7 @@ impl Run {
             fell: report.fall.is_some(),
             tripped: report.summary.trip.is_some(),
             rides_through: rides_through(report),
+            walks_on: walks_on(report),
             max_abs_position_m: max_abs_position_m(report),
             max_abs_position_after_settle_m: max_abs_position_after_m(report, SETTLE_S),
             speed_ratio_after_settle: speed_ratio_after(&report.step_records, SETTLE_S),
@@ -115,8 +116,12 @@ pub struct RunSummary {
     pub fell: bool,
     /// Whether the safety monitor tripped.
     pub tripped: bool,
-    /// No trip, no stall, no fall, still walking at the end ([`rides_through`]).
+    /// No trip, no stall, no fall, still walking at the end ([`rides_through`]; a stall
+    /// relaunched from double support is a stall).
     pub rides_through: bool,
+    /// No trip, no fall, still walking at the end, a stall relaunch or not ([`walks_on`]).
+    #[serde(default)]
+    pub walks_on: bool,
     /// The largest |position on the belt| of the run, m.
     pub max_abs_position_m: f64,
     /// The largest |position on the belt| after [`SETTLE_S`], m (`None`: ended before).

@@ -80,6 +80,18 @@ fn count(ok: usize, of: usize) -> String {
     format!("{ok}/{of}")
 }
 
+/// The runs of `rs` that ride through, of how many, and those that walked on only after a
+/// stall relaunch (not ridden through: they stalled), e.g. `3/5` or `3/5+2`.
+fn ridden(rs: &[&RunSummary]) -> String {
+    let ok = rs.iter().filter(|r| r.rides_through).count();
+    let relaunched = rs.iter().filter(|r| r.walks_on && !r.rides_through).count();
+    if relaunched == 0 {
+        count(ok, rs.len())
+    } else {
+        format!("{}+{relaunched}", count(ok, rs.len()))
+    }
+}
+
 /// Metres or a dash.
 fn metres(v: Option<f64>) -> String {
     v.map_or_else(|| "—".into(), |v| format!("{v:.3}"))
@@ -197,12 +209,12 @@ pub(crate) fn tables(
     }
     writeln!(
         out,
-        "\n(c) pushes of {PUSH_DURATION_S} s on the belt at 0.25 m/s landing at a phase of the step: runs that ride through (no trip, no stall, no fall) of {}",
+        "\n(c) pushes of {PUSH_DURATION_S} s on the belt at 0.25 m/s landing at a phase of the step: runs that ride through (no trip, no stall, no fall) of {}; +n: walked on after a stall relaunch (a stall, not counted)",
         seeds.len()
     )?;
     let mut header = format!("{:>7}", "push");
     for p in sizes.phases {
-        write!(header, " {:>6}", format!("{:.0} %", 100.0 * p))?;
+        write!(header, " {:>8}", format!("{:.0} %", 100.0 * p))?;
     }
     writeln!(out, "{header}  outcomes")?;
     for &f in &PUSH_FORCES_N {
@@ -213,8 +225,7 @@ pub(crate) fn tables(
                 summaries,
                 |r| matches!(r, Run::Push { force_x_n, phase, .. } if *force_x_n == f && *phase == p),
             );
-            let ok = rs.iter().filter(|r| r.rides_through).count();
-            write!(row, " {:>6}", count(ok, rs.len()))?;
+            write!(row, " {:>8}", ridden(&rs))?;
         }
         let all = select(
             runs,
@@ -227,19 +238,18 @@ pub(crate) fn tables(
         out,
         "\n(d) start and restart (from Stand: Start at 0 s, the controller's ramp to Stand; 20 s; stop and walk again: Stop at 10 s, Walk at 18 s, 26 s)"
     )?;
-    writeln!(out, "{:<38} {:>14}  outcomes", "case", "no trip/fall")?;
+    writeln!(out, "{:<38} {:>14}  outcomes", "case", "no trip/stall")?;
     for c in Restart::ALL {
         let rs = select(
             runs,
             summaries,
             |r| matches!(r, Run::Restart { case, .. } if *case == c),
         );
-        let ok = rs.iter().filter(|r| r.rides_through).count();
         writeln!(
             out,
             "{:<38} {:>14}  {}",
             c.name(),
-            count(ok, rs.len()),
+            ridden(&rs),
             outcomes(&rs)
         )?;
     }
@@ -262,7 +272,7 @@ fn survives(setup: &runtime::Setup, force_x_n: f64, phases: &[f64], seed: u64) -
     Ok(results?.into_iter().all(|ok| ok))
 }
 
-/// The largest push magnitude in `[0, PUSH_CEILING_N]` ridden through at every point, by
+/// The largest push magnitude in `[0, PUSH_CEILING_N]` ridden through (no stall relaunch) at every point, by
 /// bisection: (survived, failed) N (`failed` = ∞ if the ceiling survives).
 fn largest_push(setup: &runtime::Setup, sign: f64, sizes: Sizes, seed: u64) -> Result<(f64, f64)> {
     if survives(setup, sign * PUSH_CEILING_N, sizes.phases, seed)? {

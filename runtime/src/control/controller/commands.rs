@@ -142,8 +142,7 @@ impl Controller {
                 .unwrap_or(LAUNCH_SPEED_MPS.max(pass_mps));
             Launch {
                 start_t_s: t_s,
-                duration_s: timing.duration_s,
-                earliest_s: timing.earliest_s,
+                timing,
                 from: m.pose,
                 from_rate: if timing.from_motion { m.rate } else { [0.0; 3] },
                 to,
@@ -192,7 +191,7 @@ impl Controller {
         let Some(table) = launch.orbit else {
             return false;
         };
-        if t_s - launch.start_t_s < launch.earliest_s {
+        if t_s - launch.start_t_s < launch.timing.earliest_s {
             return false;
         }
         let g = self.geometry();
@@ -231,7 +230,7 @@ impl Controller {
                 launch.from_rate[k],
                 launch.to[k],
                 end_rate[k],
-                launch.duration_s,
+                launch.timing.duration_s,
                 dt,
             );
         }

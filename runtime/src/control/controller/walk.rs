@@ -4,7 +4,7 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
-use crate::control::orbit::{pinned, LEAN};
+use crate::control::orbit::LEAN;
 use crate::control::speed::LEVER_BLEND_FROM;
 use crate::control::tick::ControlState;
 use crate::control::transitions::{blend_weight, BRAKE_BLEND_FROM, START_KNEE_BLEND_SPAN};
@@ -77,6 +77,14 @@ impl Controller {
                 [a[0] - b[0], a[1] - b[1]]
             })
             .unwrap_or([f64::NAN; 2])
+    }
+
+    /// The legs' pitch ([`Self::touchdown_pitch_rad`]) into the estimator, with standard
+    /// deviation `sigma_rad`, against its estimate at the encoders' sample.
+    pub(super) fn measure_legs_pitch(&mut self, leg_q: &[f64; LEG_SLOTS], sigma_rad: f64) {
+        let pitch = self.touchdown_pitch_rad(leg_q);
+        self.estimator
+            .measure_pitch_lagged(pitch, sigma_rad, self.encoder_lag_samples);
     }
 
     /// The torso pitch at which both feet are at the same height for these joint angles (both
@@ -189,7 +197,9 @@ impl Controller {
             && (!switching || self.orbit.with_speed_control);
         let sigma = if on {
             let (q, dq) = self.measured_state(leg_q, leg_dq);
-            pinned(&self.geometry(), &q, &dq, self.stance).unwrap_or(f64::NAN)
+            self.geometry()
+                .pinned_momentum(self.stance, &q, &dq)
+                .map_or(f64::NAN, |(sigma, _)| sigma)
         } else {
             f64::NAN
         };

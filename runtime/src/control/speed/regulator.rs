@@ -26,18 +26,8 @@ impl SpeedMap for Uncalibrated {
 }
 
 /// The regulator and the position loop: what the operator set and what the steps measured.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub(in crate::control) struct SpeedRegulator {
-    position_gain_per_s: f64,
-    position_gain_per_step: f64,
-    speed_gain: f64,
-    integral_gain: f64,
-    integral_limit_mps: f64,
-    max_change_per_step_mps: f64,
-    step_length_gain_s: f64,
-    max_step_offset_m: f64,
-    slow_step_length_gain_s: f64,
-    lever_below_library: bool,
     /// Belt travel since the last impact, m.
     belt_travel_m: f64,
     /// Time of the last [`SpeedRegulator::advance`], s.
@@ -46,16 +36,21 @@ pub(in crate::control) struct SpeedRegulator {
     /// last two steps, a stride: left and right steps differ).
     previous_step: Option<(f64, f64)>,
     pub(in crate::control) status: SpeedStatus,
-    /// The start and restart settings (`speed.launch_gait_fraction` ...).
-    start: StartSettings,
+    /// The `[speed]` section: the law's gains and the start and restart settings (cloned once,
+    /// at start-up; read, never changed).
+    config: SpeedConfig,
     /// The next impact sets σ without the per-step limit.
     unlimited_next: bool,
     /// Impacts since the last Walk from Stand.
     steps_since_walk: u32,
     /// The position loop's reference, m (0: the centre).
     reference_m: f64,
-    /// Impacts left during which the reference follows the estimate (after the belt started).
+    /// Impacts left during which the reference follows the estimate (after the belt started,
+    /// or after a disturbed step).
     settle_left: u32,
+    /// The settle under way follows a disturbed step (`speed.disturbance_settle_mps`): the
+    /// command follows the robot down and the integral rests too.
+    disturbed: bool,
     /// A Stop under way with speed control: its approach and slowing steps.
     stop: Option<StopPhase>,
 }
@@ -77,38 +72,6 @@ const STOP_TARGET_TOLERANCE_M: f64 = 0.05;
 /// A Stop's approach brakes after this many impacts even short of its target.
 const STOP_APPROACH_MAX_STEPS: u32 = 12;
 
-/// The start and restart part of [`SpeedConfig`].
-#[derive(Clone, Copy, Debug)]
-pub(in crate::control) struct StartSettings {
-    pub(in crate::control) launch_gait_fraction: f64,
-    first_step_unlimited: bool,
-    position_from_start: bool,
-    integral_delay_steps: u32,
-    belt_start_settle_steps: u32,
-    reference_glide_mps: f64,
-    belt_change_unlimited_mps: f64,
-    stop_ahead_m: f64,
-    stop_approach_mps: f64,
-    stop_library_mps: f64,
-}
-
-impl From<&SpeedConfig> for StartSettings {
-    fn from(c: &SpeedConfig) -> Self {
-        Self {
-            launch_gait_fraction: c.launch_gait_fraction,
-            first_step_unlimited: c.first_step_unlimited,
-            position_from_start: c.position_from_start,
-            integral_delay_steps: c.integral_delay_steps,
-            belt_start_settle_steps: c.belt_start_settle_steps,
-            reference_glide_mps: c.reference_glide_mps,
-            belt_change_unlimited_mps: c.belt_change_unlimited_mps,
-            stop_ahead_m: c.stop_ahead_m,
-            stop_approach_mps: c.stop_approach_mps,
-            stop_library_mps: c.stop_library_mps,
-        }
-    }
-}
-
 impl SpeedRegulator {
     /// A regulator whose first library speed is `start_mps` (the gait walked before speed
     /// control begins).
@@ -116,32 +79,23 @@ impl SpeedRegulator {
         let mut status = SpeedStatus::UNKNOWN;
         status.library_mps = start_mps;
         Self {
-            position_gain_per_s: config.position_gain_per_s,
-            position_gain_per_step: config.position_gain_per_step,
-            speed_gain: config.speed_gain,
-            integral_gain: config.integral_gain,
-            integral_limit_mps: config.integral_limit_mps,
-            max_change_per_step_mps: config.max_change_per_step_mps,
-            step_length_gain_s: config.step_length_gain_s,
-            max_step_offset_m: config.max_step_offset_m,
-            slow_step_length_gain_s: config.slow_step_length_gain_s,
-            lever_below_library: config.lever_below_library,
             belt_travel_m: 0.0,
             last_t_s: None,
             previous_step: None,
             status,
-            start: StartSettings::from(config),
+            config: config.clone(),
             unlimited_next: false,
             steps_since_walk: 0,
             reference_m: 0.0,
             settle_left: 0,
+            disturbed: false,
             stop: None,
         }
     }
 
-    /// The start and restart settings.
-    pub(in crate::control) fn start_settings(&self) -> &StartSettings {
-        &self.start
+    /// The `[speed]` section it runs on.
+    pub(in crate::control) fn config(&self) -> &SpeedConfig {
+        &self.config
     }
 
     /// Start (the Ramp to Stand begins): the robot stands at the belt's centre; with
@@ -157,7 +111,7 @@ impl SpeedRegulator {
     /// that gait; then the braking step ([`SpeedRegulator::brake_now`]). Neither: it brakes
     /// at once, as without speed control.
     pub(in crate::control) fn begin_stop(&mut self) {
-        let st = self.start;
+        let st = &self.config;
         let ahead = st.stop_ahead_m > 0.0 && self.status.belt_mps > 0.0;
         self.stop = if ahead {
             self.reference_m = st.stop_ahead_m;
@@ -196,12 +150,12 @@ impl SpeedRegulator {
             OperatorCommand::Belt { speed_mps } if speed_mps.is_finite() => {
                 // The belt started (from rest) under the walking robot.
                 if walking && s.belt_mps == 0.0 && speed_mps != 0.0 {
-                    self.settle_left = self.start.belt_start_settle_steps;
+                    self.settle_left = self.config.belt_start_settle_steps;
                 }
                 // The belt-change feed-forward: a moving belt sped up under the walking robot;
                 // the next impact goes to the new belt's gait at once (not on a slow-down: a
                 // jump down to a slow gait stalled, module docs).
-                let change = self.start.belt_change_unlimited_mps;
+                let change = self.config.belt_change_unlimited_mps;
                 if walking && change > 0.0 && s.belt_mps > 0.0 && speed_mps - s.belt_mps > change {
                     self.unlimited_next = true;
                     s.integral_mps = 0.0;
@@ -243,12 +197,13 @@ impl SpeedRegulator {
     }
 
     fn forget(&mut self, from_stand: bool) {
-        let st = self.start;
+        let st = &self.config;
         self.previous_step = None;
         self.unlimited_next = from_stand && st.first_step_unlimited;
         self.steps_since_walk = if from_stand { 0 } else { u32::MAX };
         self.reference_m = 0.0;
         self.settle_left = 0;
+        self.disturbed = false;
         self.stop = None;
         let s = &mut self.status;
         if !(from_stand && st.position_from_start) {
@@ -311,19 +266,36 @@ impl SpeedRegulator {
             0.0
         };
         // The position loop's gain per second, or per step over the last stride's mean step.
-        let k_p = if self.position_gain_per_step > 0.0 && measured {
-            self.position_gain_per_step / step_s
+        let k_p = if self.config.position_gain_per_step > 0.0 && measured {
+            self.config.position_gain_per_step / step_s
         } else {
-            self.position_gain_per_s
+            self.config.position_gain_per_s
         };
-        // The reference: following the estimate while the robot settles after the belt started,
-        // then gliding back to the centre; a Stop's target ahead.
+        // A disturbed step (a push): its speed departs from the operator's by more than
+        // `speed.disturbance_settle_mps` (not in a Stop, nor in the steps after a launch).
+        let threshold = self.config.disturbance_settle_mps;
+        let operator_mps = s.belt_mps + s.offset_mps;
+        if measured
+            && threshold > 0.0
+            && self.stop.is_none()
+            && self.steps_since_walk >= self.config.integral_delay_steps
+            && (s.step_speed_mps - operator_mps).abs() > threshold
+        {
+            // The first disturbed step: σ goes to the robot's speed at once.
+            self.unlimited_next |= !self.disturbed;
+            self.settle_left = self.settle_left.max(self.config.disturbance_settle_steps);
+            self.disturbed = true;
+        }
+        // The reference: following the estimate while the robot settles after the belt started
+        // or a disturbance, then gliding back to the centre; a Stop's target ahead.
         let settling = measured && self.settle_left > 0;
+        let settling_disturbed = settling && self.disturbed;
         if settling {
             self.settle_left -= 1;
+            self.disturbed &= self.settle_left > 0;
             self.reference_m = s.position_m;
         } else if measured && self.stop.is_none() {
-            let glide = self.start.reference_glide_mps * duration_s;
+            let glide = self.config.reference_glide_mps * duration_s;
             self.reference_m -= if glide > 0.0 {
                 self.reference_m.clamp(-glide, glide)
             } else {
@@ -333,20 +305,31 @@ impl SpeedRegulator {
         self.steps_since_walk = self.steps_since_walk.saturating_add(1);
         s.requested_mps = match self.stop {
             // A Stop's approach walks ahead at a set speed over the belt's.
-            Some(StopPhase::Approach(_)) if self.start.stop_approach_mps > 0.0 => {
-                s.belt_mps + s.offset_mps + self.start.stop_approach_mps
+            Some(StopPhase::Approach(_)) if self.config.stop_approach_mps > 0.0 => {
+                s.belt_mps + s.offset_mps + self.config.stop_approach_mps
+            }
+            // After a disturbance: the robot's speed, less a step's change, down to the belt's.
+            _ if settling_disturbed => {
+                operator_mps.max(s.step_speed_mps - self.config.max_change_per_step_mps)
             }
             _ => s.belt_mps + s.offset_mps - k_p * (s.position_m - self.reference_m),
         };
         s.commanded_mps = s.requested_mps.clamp(lo, hi);
         s.clamped = s.commanded_mps != s.requested_mps;
-        let resting =
-            self.steps_since_walk <= self.start.integral_delay_steps || self.stop.is_some();
-        let k_i = if resting { 0.0 } else { self.integral_gain };
-        let integral =
-            (s.integral_mps + k_i * error).clamp(-self.integral_limit_mps, self.integral_limit_mps);
+        let resting = self.steps_since_walk <= self.config.integral_delay_steps
+            || self.stop.is_some()
+            || settling_disturbed;
+        let k_i = if resting {
+            0.0
+        } else {
+            self.config.integral_gain
+        };
+        let integral = (s.integral_mps + k_i * error).clamp(
+            -self.config.integral_limit_mps,
+            self.config.integral_limit_mps,
+        );
         // The library gait of the command, plus the step-to-step feedback.
-        let sigma = map.sigma_for(s.commanded_mps + self.speed_gain * error + integral);
+        let sigma = map.sigma_for(s.commanded_mps + self.config.speed_gain * error + integral);
         // Anti-windup: the integral only grows while σ is inside the library.
         if (sigma_lo..=sigma_hi).contains(&sigma) || integral.abs() < s.integral_mps.abs() {
             s.integral_mps = integral;
@@ -359,7 +342,7 @@ impl SpeedRegulator {
         let r = if std::mem::take(&mut self.unlimited_next) {
             f64::INFINITY
         } else {
-            self.max_change_per_step_mps
+            self.config.max_change_per_step_mps
         };
         s.library_mps = sigma.clamp(sigma_lo, sigma_hi).clamp(last - r, last + r);
         // The step lever: a step faster than the command lands the next step longer (more
@@ -367,10 +350,10 @@ impl SpeedRegulator {
         // stride's: averaged over two steps the lever came a step late and overshot (stalls).
         // After a slow step the gain is `slow_step_length_gain_s` (0 in the treadmill config: a
         // shorter step after a slow one stalled more walks on the shipped library; module docs).
-        let m = self.max_step_offset_m;
+        let m = self.config.max_step_offset_m;
         s.step_offset_m = if measured && s.commanded_mps.is_finite() {
             // Below the slowest gait the lever may measure against the request (room below).
-            let reference = if self.lever_below_library && s.requested_mps < lo {
+            let reference = if self.config.lever_below_library && s.requested_mps < lo {
                 s.requested_mps
             } else {
                 s.commanded_mps
@@ -379,9 +362,9 @@ impl SpeedRegulator {
             let gain = if settling {
                 0.0
             } else if fast < 0.0 {
-                self.slow_step_length_gain_s
+                self.config.slow_step_length_gain_s
             } else {
-                self.step_length_gain_s
+                self.config.step_length_gain_s
             };
             (gain * fast).clamp(-m, m)
         } else {
@@ -407,8 +390,8 @@ impl SpeedRegulator {
             _ => StopPhase::Slowing,
         });
         if self.stop == Some(StopPhase::Slowing) {
-            let slow = if self.start.stop_library_mps > 0.0 {
-                self.start.stop_library_mps.clamp(sigma_lo, sigma_hi)
+            let slow = if self.config.stop_library_mps > 0.0 {
+                self.config.stop_library_mps.clamp(sigma_lo, sigma_hi)
             } else {
                 sigma_hi
             };
@@ -667,6 +650,50 @@ mod tests {
             (sigma - (last - 0.02)).abs() < 1e-12,
             "σ = {sigma} after {last}"
         );
+    }
+
+    #[test]
+    fn after_a_pushed_step_the_command_follows_the_robot_down_then_the_reference_glides_back() {
+        let config = SpeedConfig {
+            disturbance_settle_mps: 0.13,
+            disturbance_settle_steps: 2,
+            speed_gain: 0.0,
+            ..start_config()
+        };
+        let mut r = regulator(&config);
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.40));
+        // A step 0.12 m/s faster than the belt: within the threshold, the lever acts.
+        r.belt_travel_m = 0.1;
+        r.on_impact(0.185, 0.5, (0.15, 0.40));
+        assert!(r.status.step_offset_m > 0.0 && r.status.requested_mps < 0.25);
+        r.status.position_m = 0.0;
+        r.status.integral_mps = 0.01;
+        // A pushed step at 0.65 m/s: the command is its speed less 0.02 m/s, σ goes there at
+        // once (the range's top), no lever, the integral at rest.
+        let sigma = r.on_impact(0.26, 0.4, (0.15, 0.40));
+        assert!((r.status.requested_mps - 0.63).abs() < 1e-12);
+        assert_eq!(sigma, 0.40);
+        assert_eq!(r.status.step_offset_m, 0.0);
+        assert_eq!(r.status.integral_mps, 0.01);
+        // The next, 0.30 m/s (within the threshold), the last of the 2 settling impacts: the
+        // command follows it down, σ by the step limit; then the reference glides back.
+        r.on_impact(0.15, 0.5, (0.15, 0.40));
+        assert!((r.status.requested_mps - 0.28).abs() < 1e-12);
+        assert!((r.status.library_mps - 0.38).abs() < 1e-12);
+        r.belt_travel_m = 0.125;
+        r.on_impact(0.125, 0.5, (0.15, 0.40));
+        assert!(r.status.requested_mps < 0.25 && r.status.requested_mps > 0.24);
+        // A slow step (a backward push) settles at the belt's speed; off (0) nothing settles.
+        r.belt_travel_m = 0.125;
+        r.on_impact(0.05, 0.5, (0.15, 0.40));
+        assert_eq!(r.status.requested_mps, 0.25);
+        let mut r = regulator(&start_config());
+        r.belt_travel_m = 0.2;
+        r.on_impact(0.2, 0.8, (0.15, 0.40));
+        r.belt_travel_m = 0.1;
+        r.on_impact(0.26, 0.4, (0.15, 0.40));
+        assert!(r.status.requested_mps < 0.25 && r.status.step_offset_m > 0.0);
     }
 
     #[test]
