@@ -25,7 +25,7 @@
 
 use core::time::Duration;
 use drivers::a1::{Command, Reply};
-use drivers::bus::{ExchangeReport, Lifecycle, MotorBus, MotorSpec};
+use drivers::bus::{BusWrapper, ExchangeReport, MotorBus};
 use drivers::imu::{Imu, ImuError, ImuSample};
 use drivers::sim::bus::SimBus;
 use drivers::sim::robot::{RobotSim, SimEvent};
@@ -77,20 +77,16 @@ impl Probe {
     }
 }
 
-impl MotorBus for Probe {
-    fn state(&self) -> Lifecycle {
-        self.bus.state()
+/// The simulator's bus, the true state after each exchange recorded.
+impl BusWrapper for Probe {
+    type Inner = SimBus<RobotSim>;
+    fn inner(&self) -> &Self::Inner {
+        &self.bus
     }
-    fn bus_count(&self) -> usize {
-        self.bus.bus_count()
+    fn inner_mut(&mut self) -> &mut Self::Inner {
+        &mut self.bus
     }
-    fn configure(&mut self, motors: &[MotorSpec]) -> drivers::bus::Result<()> {
-        self.bus.configure(motors)
-    }
-    fn activate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.activate()
-    }
-    fn exchange(
+    fn wrapped_exchange(
         &mut self,
         commands: &[Command],
         replies: &mut [Reply],
@@ -99,9 +95,6 @@ impl MotorBus for Probe {
         let r = self.bus.exchange(commands, replies, budget);
         self.q_after.push(self.bus.plant().q().to_vec());
         r
-    }
-    fn deactivate(&mut self) -> drivers::bus::Result<()> {
-        self.bus.deactivate()
     }
 }
 
