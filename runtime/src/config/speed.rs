@@ -22,6 +22,10 @@ use serde::{Deserialize, Serialize};
 /// Δℓ    = clamp(g · (v_k − v_cmd), ± max_step_offset_m)   (the next step lands Δℓ longer:
 ///         g = step_length_gain_s after a fast step,        the step lever)
 ///             slow_step_length_gain_s after a slow one
+/// λ     = clamp(−h · (v_k − v_cmd), ± max_step_lean_rad)  (the next step's torso lean,
+///         h = step_lean_gain_rad_per_mps after a fast step,  + forward: the step lean)
+///             slow_step_lean_gain_rad_per_mps after a slow one,
+///             times clamp((σ − step_lean_from_mps) / (step_lean_full_mps − step_lean_from_mps), 0, 1)
 /// a step with |v_k − b − offset| > disturbance_settle_mps: for disturbance_settle_steps
 ///         impacts v_cmd = max(b + offset, v_k − max_change_per_step_mps), no lever, no I
 /// ```
@@ -59,6 +63,34 @@ pub struct SpeedConfig {
     /// slow one stalled more walks at 0.15–0.20 m/s, `runtime::control::speed`).
     #[serde(default = "default_step_length_gain_s")]
     pub slow_step_length_gain_s: f64,
+    /// The step lean: the next step leans the torso (both hips offset alike, the feet's
+    /// relative pose unmoved) back by this much per m/s that the last step was faster than the
+    /// command, forward when slower, rad/(m/s) (0, the default: off). Speed damping on the
+    /// Poincaré section: gravity's work over the step answers the lean within the step, where
+    /// the library speed σ moves the walked speed by a tenth per step (`runtime::control::speed`).
+    #[serde(default)]
+    pub step_lean_gain_rad_per_mps: f64,
+    /// The step lean's gain after a step slower than the command (the next step leans
+    /// forward), rad/(m/s) (0, the default: no forward lean).
+    #[serde(default)]
+    pub slow_step_lean_gain_rad_per_mps: f64,
+    /// The step lean's gains act in full from this library speed σ of the next step up,
+    /// m/s, and scale down linearly to 0 at `step_lean_from_mps` (the slow gaits walk several
+    /// times faster per mrad of lean: a lean that damps the 0.30 m/s gaits stalls the 0.15 m/s
+    /// ones). 0, the default: in full at every σ.
+    #[serde(default)]
+    pub step_lean_full_mps: f64,
+    /// Below this library speed σ, no step lean, m/s (see `step_lean_full_mps`).
+    #[serde(default)]
+    pub step_lean_from_mps: f64,
+    /// Measure each step's length again at the tick after an impact felt by the IMU (both feet
+    /// down), and correct the position by the difference: the encoders' sample of the impact
+    /// tick predates the impact (`runtime::control::speed`, "The step's length"). Off by default.
+    #[serde(default)]
+    pub step_length_after_impact: bool,
+    /// The step lean stays within ± this, rad.
+    #[serde(default)]
+    pub max_step_lean_rad: f64,
     /// Where the position on the belt comes from: leg odometry (the belt speed set by the
     /// operator integrated against the measured steps).
     #[serde(default)]
@@ -173,6 +205,12 @@ impl Default for SpeedConfig {
             step_length_gain_s: default_step_length_gain_s(),
             max_step_offset_m: default_max_step_offset_m(),
             slow_step_length_gain_s: default_step_length_gain_s(),
+            step_lean_gain_rad_per_mps: 0.0,
+            slow_step_lean_gain_rad_per_mps: 0.0,
+            step_lean_full_mps: 0.0,
+            step_length_after_impact: false,
+            step_lean_from_mps: 0.0,
+            max_step_lean_rad: 0.0,
             position_source: PositionSource::Odometry,
             library: None,
             walked_mps: Vec::new(),
@@ -226,6 +264,17 @@ impl SpeedConfig {
                 "speed.slow_step_length_gain_s",
                 self.slow_step_length_gain_s,
             ),
+            (
+                "speed.step_lean_gain_rad_per_mps",
+                self.step_lean_gain_rad_per_mps,
+            ),
+            (
+                "speed.slow_step_lean_gain_rad_per_mps",
+                self.slow_step_lean_gain_rad_per_mps,
+            ),
+            ("speed.max_step_lean_rad", self.max_step_lean_rad),
+            ("speed.step_lean_full_mps", self.step_lean_full_mps),
+            ("speed.step_lean_from_mps", self.step_lean_from_mps),
             ("speed.below_library_mps", self.below_library_mps),
             ("speed.launch_gait_fraction", self.launch_gait_fraction),
             ("speed.reference_glide_mps", self.reference_glide_mps),

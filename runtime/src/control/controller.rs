@@ -65,7 +65,7 @@ use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
 use super::orbit::OrbitLever;
 use super::recovery::{StallDetector, RELAUNCH, RELAUNCH_MAX_PHASE_RATE_PER_S};
-use super::speed::{SpeedLibrary, SpeedMap, SpeedRegulator, StepLever};
+use super::speed::{SpeedLibrary, SpeedRegulator, StepLever};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
     braking_touchdown, min_jerk, Launch, Lunge, Ramp, StartBlend, FROM_STAND, MIN_JERK_PEAK_RATE,
@@ -83,6 +83,7 @@ use model::robot::{Legs, MAX_DOF};
 use model::{PlanarModel, Side};
 
 mod commands;
+mod speed_switch;
 #[cfg(test)]
 mod tests;
 mod walk;
@@ -130,6 +131,10 @@ pub struct Controller {
     touchdown_after_impact: bool,
     /// The impact's tick measured the legs' pitch: measure it again at the next tick.
     pitch_after_impact_due: bool,
+    /// `speed.step_length_after_impact`; and the length measured at the impact's tick, to be
+    /// measured again at the next (`runtime::control::speed`, "The step's length").
+    step_length_after_impact: bool,
+    step_length_due_m: Option<f64>,
     safety: SafetyMonitor,
     // Run-time state.
     state: ControlState,
@@ -305,6 +310,8 @@ impl Controller {
             encoder_lag_samples: config.estimator.encoder_lag_samples as usize,
             touchdown_after_impact: config.estimator.touchdown_after_impact,
             pitch_after_impact_due: false,
+            step_length_after_impact: config.speed.step_length_after_impact,
+            step_length_due_m: None,
             safety: SafetyMonitor::new(
                 config.safety.clone(),
                 config.loop_.max_overrun_streak,
@@ -381,7 +388,7 @@ impl Controller {
         self.phase_hat = None;
         self.steps = 0;
         self.regulator.restart();
-        self.step_lever.offset_m = 0.0;
+        self.step_lever.rest();
         // As after an impact: a stall of this first step may relaunch.
         self.stall.restart(t_s, f64::NAN);
         self.enter(ControlState::Walk, status);
@@ -464,7 +471,7 @@ impl Controller {
                 self.touchdown_ticks = 0;
                 self.steps = 0;
                 self.regulator.restart_from_stand();
-                self.step_lever.offset_m = 0.0;
+                self.step_lever.rest();
                 self.launch_gait();
                 self.launch_requested = true;
                 self.enter(S::Walk, status);
@@ -542,6 +549,11 @@ impl Controller {
             && matches!(self.state, ControlState::Walk | ControlState::Stop)
         {
             self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad * SQRT_2);
+        }
+        // The tick after an impact: the step's length again, both feet down.
+        if let Some(at_impact_m) = self.step_length_due_m.take() {
+            let length_m = -self.feet_offset_at(self.estimator.pitch_rad(), &leg_q)[0];
+            self.regulator.correct_step_length(length_m - at_impact_m);
         }
         // Operator, then safety (a trip overrides any request).
         if let Some(cmd) = input.operator {
@@ -720,6 +732,9 @@ impl Controller {
                             (t, &leg_q, &leg_dq),
                             &mut eval,
                         );
+                        // The encoders sampled the feet before the impact the IMU felt.
+                        let again = impact_switch && self.step_length_after_impact;
+                        self.step_length_due_m = again.then_some(step_length_m);
                         if approach && self.regulator.brake_now() {
                             self.braking = true;
                             eval = self.walk_references(t, &leg_q, &leg_dq);
@@ -811,88 +826,5 @@ impl Controller {
             speed: self.regulator.status,
             speed_update,
         };
-    }
-
-    /// Walk from Stand with speed control on a moving belt: the launch and the first step walk
-    /// the library gait `speed.launch_gait_fraction` of the way from the Stand gait to the one
-    /// that walks the belt's speed (`runtime::control::speed`, "Start and restart").
-    fn launch_gait(&mut self) {
-        let fraction = self.regulator.config().launch_gait_fraction;
-        let Some(library) = &self.library else {
-            return;
-        };
-        let s = self.regulator.status;
-        if !(fraction > 0.0 && self.regulator.active() && s.belt_mps > 0.0) {
-            return;
-        }
-        let (lo, hi) = library.range_mps();
-        let target = library.sigma_for(s.belt_mps + s.offset_mps).clamp(lo, hi);
-        let from = if s.library_mps.is_finite() {
-            s.library_mps
-        } else {
-            lo
-        };
-        let sigma = from + fraction * (target - from);
-        library.blend_into(sigma, &mut self.gait, &mut self.lunge, &mut self.step_lever);
-        self.orbit.select(sigma);
-        self.regulator.status.library_mps = sigma;
-    }
-
-    /// At an impact in Walk with speed control on: measures the step that ended, runs the
-    /// regulator and, with a library, switches to the gait of the regulated speed, carrying the
-    /// references' jump into the new step as a blend (`runtime::control::speed`). Returns the
-    /// phase rate to start the new step at; `eval` becomes the new step's first references.
-    fn switch_speed(
-        &mut self,
-        step_length_m: f64,
-        step_duration_s: f64,
-        rate: f64,
-        (t, leg_q, leg_dq): (f64, &[f64; LEG_SLOTS], &[f64; LEG_SLOTS]),
-        eval: &mut walk::WalkEval,
-    ) -> f64 {
-        let Some(library) = &self.library else {
-            self.regulator
-                .on_impact(step_length_m, step_duration_s, (0.0, f64::INFINITY));
-            return rate;
-        };
-        let sigma = self.regulator.on_impact_mapped(
-            step_length_m,
-            step_duration_s,
-            library.range_mps(),
-            library,
-        );
-        let span_old = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
-        let mut y_old = eval.y;
-        // The step that ended landed its lever's offset from the gait's touchdown pose: relabeled
-        // to the new stance leg's outputs, it is part of the jump the new step blends out.
-        let (new, old) = (side_index(self.stance), side_index(self.stance.other()));
-        for (j, y) in y_old.iter_mut().enumerate() {
-            let slot = self.gait.out_slot[new][j];
-            if let Some(i) = (0..OUTPUTS).find(|&i| self.gait.out_slot[old][i] == slot) {
-                *y += self.step_lever.dy_end(i);
-            }
-        }
-        library.blend_into(sigma, &mut self.gait, &mut self.lunge, &mut self.step_lever);
-        self.orbit.select(sigma);
-        self.step_lever.offset_m = self.regulator.status.step_offset_m;
-        let span_new = self.gait.theta_minus_rad - self.gait.theta_plus_rad;
-        // The same stance-leg angle rate, in the new gait's phase units.
-        let rate = if span_new.abs() > 1e-9 {
-            rate * span_old / span_new
-        } else {
-            rate
-        };
-        *eval = self.walk_references(t, leg_q, leg_dq);
-        let mut offset = [0.0; OUTPUTS];
-        for (i, o) in offset.iter_mut().enumerate() {
-            *o = y_old[i] - eval.y[i];
-        }
-        self.start_blend = Some(StartBlend {
-            from_phase: eval.phase.clamp(0.0, 1.0),
-            offset,
-            span: START_BLEND_SPAN,
-        });
-        *eval = self.references(eval.phase, eval.phase_rate, eval.foot_height_m);
-        rate
     }
 }

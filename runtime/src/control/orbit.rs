@@ -416,7 +416,7 @@ fn fade(tau: f64, from: f64) -> f64 {
 }
 
 /// +1 if raising both hips' outputs moves the centre of mass forward at mid-step, −1 if back.
-fn lean_sign(g: &Geometry, table: &GaitTable) -> Option<f64> {
+pub(super) fn lean_sign(g: &Geometry, table: &GaitTable) -> Option<f64> {
     let stance = table.first_stance;
     let com_x = |lean: f64| {
         let q = pose_at(g, table, stance, 0.5, lean)?;

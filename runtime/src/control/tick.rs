@@ -333,6 +333,8 @@ pub struct SpeedStatus {
     pub clamped: bool,
     /// How much longer than its gait's the next step lands (the step lever), m.
     pub step_offset_m: f64,
+    /// How far the next step leans the torso forward (the step lean; − back), rad.
+    pub step_lean_rad: f64,
 }
 
 impl SpeedStatus {
@@ -350,6 +352,7 @@ impl SpeedStatus {
         integral_mps: 0.0,
         clamped: false,
         step_offset_m: 0.0,
+        step_lean_rad: 0.0,
     };
 }
 

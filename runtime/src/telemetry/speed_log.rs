@@ -7,7 +7,8 @@
 //! `step_length_m`, `step_duration_s`, `position_m` (estimated, + forward),
 //! `true_position_m` (`null` without ground truth), `library_mps` (the gait in use for the next
 //! step), `integral_mps`, `step_offset_m` (the step lever: how much longer than its gait's the
-//! next step lands).
+//! next step lands), `step_lean_rad` (the step lean: how far forward the next step leans the
+//! torso, − back).
 
 use crate::control::SpeedStatus;
 use serde_json::{json, Value};
@@ -24,7 +25,7 @@ pub fn speed_schema() -> Value {
         "requested_mps": number(), "commanded_mps": number(), "clamped": {"type": "boolean"},
         "step_speed_mps": number(), "step_length_m": number(), "step_duration_s": number(),
         "position_m": number(), "true_position_m": number(), "library_mps": number(),
-        "integral_mps": number(), "step_offset_m": number()}})
+        "integral_mps": number(), "step_offset_m": number(), "step_lean_rad": number()}})
 }
 
 /// A finite number, or `null`.
@@ -45,6 +46,6 @@ pub fn speed_json(t_s: f64, s: &SpeedStatus, true_position_m: Option<f64>) -> Va
         "step_length_m": num(s.step_length_m), "step_duration_s": num(s.step_duration_s),
         "position_m": num(s.position_m), "true_position_m": true_position_m.map_or(Value::Null, num),
         "library_mps": num(s.library_mps), "integral_mps": num(s.integral_mps),
-        "step_offset_m": num(s.step_offset_m),
+        "step_offset_m": num(s.step_offset_m), "step_lean_rad": num(s.step_lean_rad),
     })
 }

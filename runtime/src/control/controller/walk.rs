@@ -164,6 +164,12 @@ impl Controller {
                 dy[i] += db * lever.dy_end(i);
             }
         }
+        // The step lean (speed control): both hips offset alike all through the step.
+        if !self.braking && lever.lean_rad != 0.0 {
+            for (i, y) in y.iter_mut().enumerate() {
+                *y += lever.lean(i);
+            }
+        }
         let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
         WalkEval {
             feedforward_nm: self.gait.feedforward(s),

@@ -15,6 +15,7 @@
 
 use super::super::double_support::{slots, solve2, Geometry};
 use super::super::gait_table::{side_index, GaitTable};
+use super::super::orbit::{lean_sign, LEAN};
 use super::super::transitions::{braking_touchdown, first_pose_torso};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
 use model::robot::MAX_DOF;
@@ -34,6 +35,12 @@ pub(in crate::control) struct StepLever {
     pub(in crate::control) theta_per_m: f64,
     /// This step's length offset, m (0: the gait's own step).
     pub(in crate::control) offset_m: f64,
+    /// +1 or −1: the hip offset that moves the centre of mass forward at mid-step.
+    pub(in crate::control) lean_sign: f64,
+    /// This step's torso lean, rad (+ forward; 0: the gait's own): both hips offset by
+    /// `lean_sign`·`lean_rad` for the whole step (a change at an impact blends in with the
+    /// references' jump, `runtime::control::speed`).
+    pub(in crate::control) lean_rad: f64,
 }
 
 impl StepLever {
@@ -112,6 +119,8 @@ impl StepLever {
             dy_end_per_m,
             theta_per_m,
             offset_m: 0.0,
+            lean_sign: lean_sign(geometry, gait)?,
+            lean_rad: 0.0,
         };
         let finite =
             lever.dy_end_per_m.iter().all(|d| d.is_finite()) && lever.theta_per_m.is_finite();
@@ -121,6 +130,17 @@ impl StepLever {
     /// Offset of output `i` at this step's touchdown, rad.
     pub(in crate::control) fn dy_end(&self, i: usize) -> f64 {
         self.offset_m * self.dy_end_per_m[i]
+    }
+
+    /// Offset of output `i` by this step's lean, rad (the same all through the step).
+    pub(in crate::control) fn lean(&self, i: usize) -> f64 {
+        self.lean_sign * LEAN[i] * self.lean_rad
+    }
+
+    /// No longer step, no lean: the gait's own step.
+    pub(in crate::control) fn rest(&mut self) {
+        self.offset_m = 0.0;
+        self.lean_rad = 0.0;
     }
 
     /// Offset of the stance-leg angle at this step's touchdown, rad.

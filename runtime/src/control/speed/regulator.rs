@@ -43,6 +43,8 @@ pub(in crate::control) struct SpeedRegulator {
     unlimited_next: bool,
     /// Impacts since the last Walk from Stand.
     steps_since_walk: u32,
+    /// Impacts since the walk began (from Stand or in the gait's own state).
+    steps_walked: u32,
     /// The position loop's reference, m (0: the centre).
     reference_m: f64,
     /// Impacts left during which the reference follows the estimate (after the belt started,
@@ -53,6 +55,8 @@ pub(in crate::control) struct SpeedRegulator {
     disturbed: bool,
     /// A Stop under way with speed control: its approach and slowing steps.
     stop: Option<StopPhase>,
+    /// The last step was more than `speed.disturbance_settle_mps` off the operator's speed.
+    previous_off: bool,
 }
 
 /// Where a Stop with speed control is (`runtime::control::speed`, "Start and restart").
@@ -65,6 +69,10 @@ enum StopPhase {
     /// The next step is the braking step.
     Brake,
 }
+
+/// The most the tick after an impact may correct the step's length by, m (the swing foot
+/// moves a millimetre or so in the period between the encoders' sample and the impact).
+const MAX_STEP_LENGTH_CORRECTION_M: f64 = 0.01;
 
 /// How near its stop target a Stop's approach ends, m.
 const STOP_TARGET_TOLERANCE_M: f64 = 0.05;
@@ -86,10 +94,12 @@ impl SpeedRegulator {
             config: config.clone(),
             unlimited_next: false,
             steps_since_walk: 0,
+            steps_walked: 0,
             reference_m: 0.0,
             settle_left: 0,
             disturbed: false,
             stop: None,
+            previous_off: false,
         }
     }
 
@@ -201,9 +211,11 @@ impl SpeedRegulator {
         self.previous_step = None;
         self.unlimited_next = from_stand && st.first_step_unlimited;
         self.steps_since_walk = if from_stand { 0 } else { u32::MAX };
+        self.steps_walked = 0;
         self.reference_m = 0.0;
         self.settle_left = 0;
         self.disturbed = false;
+        self.previous_off = false;
         self.stop = None;
         let s = &mut self.status;
         if !(from_stand && st.position_from_start) {
@@ -212,6 +224,7 @@ impl SpeedRegulator {
         }
         s.integral_mps = 0.0;
         s.step_offset_m = 0.0;
+        s.step_lean_rad = 0.0;
         s.step_speed_mps = f64::NAN;
         s.commanded_mps = f64::NAN;
     }
@@ -280,11 +293,18 @@ impl SpeedRegulator {
             && self.stop.is_none()
             && self.steps_since_walk >= self.config.integral_delay_steps
             && (s.step_speed_mps - operator_mps).abs() > threshold
+            && !(self.disturbed && self.settle_left > 0)
+            && !self.previous_off
         {
             // The first disturbed step: σ goes to the robot's speed at once.
             self.unlimited_next |= !self.disturbed;
             self.settle_left = self.settle_left.max(self.config.disturbance_settle_steps);
             self.disturbed = true;
+        }
+        // A robot that stays that far off is not pushed (a stumble's run-on, a fast gait):
+        // only a step off after one on the belt's speed starts a settle.
+        if measured {
+            self.previous_off = (s.step_speed_mps - operator_mps).abs() > threshold;
         }
         // The reference: following the estimate while the robot settles after the belt started
         // or a disturbance, then gliding back to the centre; a Stop's target ahead.
@@ -303,14 +323,25 @@ impl SpeedRegulator {
             };
         }
         self.steps_since_walk = self.steps_since_walk.saturating_add(1);
+        self.steps_walked = self.steps_walked.saturating_add(1);
         s.requested_mps = match self.stop {
             // A Stop's approach walks ahead at a set speed over the belt's.
             Some(StopPhase::Approach(_)) if self.config.stop_approach_mps > 0.0 => {
                 s.belt_mps + s.offset_mps + self.config.stop_approach_mps
             }
             // After a disturbance: the robot's speed, less a step's change, down to the belt's.
+            // Never up again within the settle: a command that followed the robot up would
+            // keep it fast (measured: a stumble's 0.9 m/s step ran the robot off the belt).
             _ if settling_disturbed => {
-                operator_mps.max(s.step_speed_mps - self.config.max_change_per_step_mps)
+                let follow =
+                    operator_mps.max(s.step_speed_mps - self.config.max_change_per_step_mps);
+                if self.settle_left + 1 < self.config.disturbance_settle_steps
+                    && s.requested_mps.is_finite()
+                {
+                    follow.min(s.requested_mps)
+                } else {
+                    follow
+                }
             }
             _ => s.belt_mps + s.offset_mps - k_p * (s.position_m - self.reference_m),
         };
@@ -345,6 +376,8 @@ impl SpeedRegulator {
             self.config.max_change_per_step_mps
         };
         s.library_mps = sigma.clamp(sigma_lo, sigma_hi).clamp(last - r, last + r);
+        // σ held back by its rate limit: the command moves (a belt change), the slow loop's to follow.
+        let slewing = s.library_mps != sigma.clamp(sigma_lo, sigma_hi);
         // The step lever: a step faster than the command lands the next step longer (more
         // speed lost in its impact), a slower one shorter. The last step's speed, not the
         // stride's: averaged over two steps the lever came a step late and overshot (stalls).
@@ -370,9 +403,60 @@ impl SpeedRegulator {
         } else {
             0.0
         };
+        // The step lean: speed damping within the next step (a fast step leans the next back).
+        let lean_max = self.config.max_step_lean_rad;
+        let lean_on = self.steps_walked > self.config.integral_delay_steps && !resting;
+        s.step_lean_rad =
+            if measured && s.commanded_mps.is_finite() && !settling && !slewing && lean_on {
+                let fast = s.step_speed_mps - s.commanded_mps;
+                let (from, full) = (
+                    self.config.step_lean_from_mps,
+                    self.config.step_lean_full_mps,
+                );
+                let gain = if fast >= 0.0 {
+                    self.config.step_lean_gain_rad_per_mps
+                } else {
+                    self.config.slow_step_lean_gain_rad_per_mps
+                };
+                // How fast a gait the robot walks: the library's, or faster after a fast step.
+                let walks = if fast >= 0.0 {
+                    s.library_mps.max(map.sigma_for(s.step_speed_mps))
+                } else {
+                    s.library_mps
+                };
+                let share = if full > from {
+                    ((walks - from) / (full - from)).clamp(0.0, 1.0)
+                } else {
+                    1.0
+                };
+                (-share * gain * fast).clamp(-lean_max, lean_max)
+            } else {
+                0.0
+            };
         let position_m = s.position_m;
         self.stop_step(position_m, last, range_mps);
         self.status.library_mps
+    }
+
+    /// The step that ended at the last impact measured again (both feet down, the tick after):
+    /// its length, the position and the stride's history move by `delta_m` (the next step's
+    /// gait, chosen at the impact, stays). Ignored if not finite or over
+    /// [`MAX_STEP_LENGTH_CORRECTION_M`].
+    pub(in crate::control) fn correct_step_length(&mut self, delta_m: f64) {
+        if !(delta_m.abs() <= MAX_STEP_LENGTH_CORRECTION_M)
+            || !self.status.step_length_m.is_finite()
+        {
+            return;
+        }
+        let s = &mut self.status;
+        s.step_length_m += delta_m;
+        s.position_m += delta_m;
+        if s.step_duration_s > 0.0 {
+            s.step_speed_mps = s.step_length_m / s.step_duration_s;
+        }
+        if let Some((length_m, _)) = self.previous_step.as_mut() {
+            *length_m += delta_m;
+        }
     }
 
     /// A Stop's step at an impact: the approach ends at its target (or after
@@ -403,6 +487,10 @@ impl SpeedRegulator {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "regulator/lean_tests.rs"]
+mod lean_tests;
 
 #[cfg(test)]
 #[allow(clippy::unwrap_used)]
