@@ -171,7 +171,7 @@
 //! law; an initiation step from the wide stance is the open lead.
 
 use crate::slots::LEG_SLOTS;
-use model::robot::{Legs, PlanarModel, Side, MAX_DOF};
+use model::robot::{BodyInertia, Legs, PlanarModel, Side, MAX_BODIES, MAX_DOF};
 
 /// Torso origin x, z (m) and pitch (rad), relative to the stance foot.
 pub type TorsoPose = [f64; 3];
@@ -399,20 +399,7 @@ impl Geometry<'_> {
     ) -> Option<[f64; LEG_SLOTS]> {
         let q = self.config(pose, leg_q);
         let st = self.model.body_poses(&q[..self.dof]).ok()?;
-        let mut g = [0.0; MAX_DOF];
-        for (b, body) in self.model.bodies.iter().enumerate() {
-            let m = body.inertia.mass_kg;
-            if m == 0.0 {
-                continue;
-            }
-            let com = self.model.point_position(&st, b, body.inertia.com_xz_m);
-            let w = m * self.model.gravity_mps2;
-            self.model.point_jacobian_into(&st, b, com, |row, col, v| {
-                if row == 1 {
-                    g[col] += v * w;
-                }
-            });
-        }
+        let g = self.gravity_forces(&st)?;
         let mut jb = [[0.0; 3]; 4];
         let mut jl = [[0.0; LEG_SLOTS]; 4];
         for (f, side) in [stance, stance.other()].into_iter().enumerate() {
@@ -443,6 +430,28 @@ impl Geometry<'_> {
             *uk = g[self.leg_coord[k]] - (0..4).map(|r| jl[r][k] * lambda[r]).sum::<f64>();
         }
         Some(u)
+    }
+
+    /// The generalized gravity forces G(q) of the robot at rest in the body states `st` (computed
+    /// with zero velocities, [`PlanarModel::body_poses`]), N or N·m by coordinate: the model's
+    /// inverse dynamics at q̇ = 0, q̈ = 0 ([`PlanarModel::inverse_dynamics_in`]). `None` if the
+    /// model has more bodies than [`MAX_BODIES`]. Never allocates.
+    fn gravity_forces(&self, st: &model::kinematics::BodyStates<f64>) -> Option<[f64; MAX_DOF]> {
+        let bodies = self.model.bodies.len();
+        let mut inertias = [BodyInertia::ZERO; MAX_BODIES];
+        for (slot, body) in inertias.iter_mut().zip(&self.model.bodies) {
+            *slot = body.inertia;
+        }
+        let mut g = [0.0; MAX_DOF];
+        self.model
+            .inverse_dynamics_in(
+                inertias.get(..bodies)?,
+                st,
+                &[0.0; MAX_DOF][..self.dof],
+                &mut g[..self.dof],
+            )
+            .ok()?;
+        Some(g)
     }
 
     /// ∂(foot position)/∂(hip, knee) of one leg: a 2 × 2 matrix, rows x and z.
@@ -691,6 +700,57 @@ mod tests {
         let limp = speed_after(&torques_for(0.0));
         assert!(held < 1e-3, "held: {held}");
         assert!(limp > 0.1, "limp: {limp}");
+    }
+
+    /// G(q) summed by hand: each body's weight through the vertical row of its centre of mass's
+    /// Jacobian (the sum `gravity_torques` used before it took the model's inverse dynamics).
+    fn gravity_forces_by_hand(g: &Geometry<'_>, q: &[f64; MAX_DOF]) -> [f64; MAX_DOF] {
+        let model = g.model;
+        let st = model.body_poses(&q[..g.dof]).unwrap();
+        let mut out = [0.0; MAX_DOF];
+        for (b, body) in model.bodies.iter().enumerate() {
+            let m = body.inertia.mass_kg;
+            if m == 0.0 {
+                continue;
+            }
+            let com = model.point_position(&st, b, body.inertia.com_xz_m);
+            let w = m * model.gravity_mps2;
+            model.point_jacobian_into(&st, b, com, |row, col, v| {
+                if row == 1 {
+                    out[col] += v * w;
+                }
+            });
+        }
+        out
+    }
+
+    #[test]
+    fn gravity_forces_from_the_inverse_dynamics_match_the_sum_by_hand() {
+        let fixture = Fixture::new();
+        let g = fixture.geometry();
+        let warm = [0.2, 0.4, 0.2, 0.4];
+        for (stance, pose, other) in [
+            (Side::Right, [-0.08, 0.64, 0.03], [-0.2, 0.0]),
+            (Side::Left, [-0.15, 0.62, -0.05], [-0.3, 0.0]),
+            (Side::Right, [0.02, 0.66, 0.10], [-0.1, 0.01]),
+            (Side::Left, [-0.20, 0.58, 0.0], [-0.35, -0.02]),
+        ] {
+            let (leg_q, _) = g.solve(stance, pose, [0.0; 3], other, &warm).unwrap();
+            let q = g.config(pose, &leg_q);
+            let st = g.model.body_poses(&q[..g.dof]).unwrap();
+            let from_model = g.gravity_forces(&st).unwrap();
+            let by_hand = gravity_forces_by_hand(&g, &q);
+            for c in 0..g.dof {
+                assert!(
+                    (from_model[c] - by_hand[c]).abs() < 1e-9,
+                    "{stance:?} {pose:?}, coordinate {c}: {} vs {}",
+                    from_model[c],
+                    by_hand[c]
+                );
+            }
+            // Not all zero: the robot has weight.
+            assert!(by_hand[1] > 100.0, "{by_hand:?}");
+        }
     }
 
     #[test]
