@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 /// Δℓ    = clamp(g · (v_k − v_cmd), ± max_step_offset_m)   (the next step lands Δℓ longer:
 ///         g = step_length_gain_s after a fast step,        the step lever)
 ///             slow_step_length_gain_s after a slow one
-/// a step with |v_k − b − offset| > disturbance_settle_mps: for disturbance_settle_steps
+/// a step with v_k − b − offset > disturbance_settle_mps: for disturbance_settle_steps
 ///         impacts v_cmd = max(b + offset, v_k − max_change_per_step_mps), no lever, no I
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -118,9 +118,9 @@ pub struct SpeedConfig {
     /// `first_step_unlimited` after a Walk from Stand) and the integral starts again from 0.
     #[serde(default)]
     pub belt_change_unlimited_mps: f64,
-    /// A disturbance (a push) seen at an impact: a step whose speed departs from the
-    /// operator's (belt + offset) by more than this, m/s, starts a settle (0, the default:
-    /// off). For `disturbance_settle_steps` impacts after the last such step the reference
+    /// A disturbance (a forward push) seen at an impact: a step faster than the operator's
+    /// speed (belt + offset) by more than this, m/s, starts a settle (0, the default: off; a
+    /// slow step never does: following the robot down only means something after a fast one). For `disturbance_settle_steps` impacts after the last such step the reference
     /// follows the estimate, the step lever and the integral rest, and the command follows the
     /// robot down: the last step's speed less `max_change_per_step_mps`, never below the
     /// operator's (the first such impact sets σ without the step limit); then the reference
