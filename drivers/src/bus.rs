@@ -284,9 +284,16 @@ pub trait MotorBus {
 
 /// A [`MotorBus`] that wraps another and forwards to it (a fault injector, a recorder, a bus
 /// paired with an IMU): implement this and the blanket impl makes the wrapper a `MotorBus` that
-/// forwards every method to [`BusWrapper::inner`], the exchange through
-/// [`BusWrapper::wrapped_exchange`] (override it to act around the inner bus's). Static
-/// dispatch: the wrapper adds nothing to the exchange that it does not write itself.
+/// forwards every method to [`BusWrapper::inner`]. Its exchange calls
+/// [`BusWrapper::before_exchange`], then the inner bus's exchange, then
+/// [`BusWrapper::after_exchange`] (whatever the inner exchange returned), and returns the inner
+/// bus's result: a wrapper overrides only the hook it needs. Static dispatch: the wrapper adds
+/// nothing to the exchange that its hooks do not do.
+///
+/// The hooks see the wrapper, not the exchange's slices: no wrapper needs more (the fault
+/// injector applies the faults due at the inner simulator's time; the probes record the
+/// simulator's state after it; a test counts exchanges). A wrapper that must change what is
+/// sent or returned implements [`MotorBus`] itself.
 pub trait BusWrapper {
     /// The wrapped bus.
     type Inner: MotorBus;
@@ -297,16 +304,14 @@ pub trait BusWrapper {
     /// The wrapped bus, mutable.
     fn inner_mut(&mut self) -> &mut Self::Inner;
 
-    /// The wrapper's [`MotorBus::exchange`]: by default the inner bus's. Allocates nothing
-    /// (an override must not either, outside tests and tools).
-    fn wrapped_exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> Result<ExchangeReport> {
-        self.inner_mut().exchange(commands, replies, budget)
-    }
+    /// Runs before each exchange is handed to the inner bus; by default nothing. Runs in the
+    /// control tick: allocates nothing, never blocks (outside tests and tools).
+    fn before_exchange(&mut self) {}
+
+    /// Runs after each exchange of the inner bus, whether it succeeded or not; by default
+    /// nothing. Runs in the control tick: allocates nothing, never blocks (outside tests and
+    /// tools).
+    fn after_exchange(&mut self) {}
 }
 
 impl<W: BusWrapper> MotorBus for W {
@@ -328,7 +333,10 @@ impl<W: BusWrapper> MotorBus for W {
         replies: &mut [Reply],
         budget: Duration,
     ) -> Result<ExchangeReport> {
-        self.wrapped_exchange(commands, replies, budget)
+        self.before_exchange();
+        let result = self.inner_mut().exchange(commands, replies, budget);
+        self.after_exchange();
+        result
     }
     fn deactivate(&mut self) -> Result<()> {
         self.inner_mut().deactivate()

@@ -4,7 +4,7 @@
 
 use core::time::Duration;
 use drivers::a1::{Command, Frame, MotorId, Reply};
-use drivers::bus::{BusWrapper, ExchangeReport, MotorBus, MotorSpec};
+use drivers::bus::{BusWrapper, MotorBus, MotorSpec};
 use drivers::conformance::{Harness, HoldCheck};
 use drivers::sim::bus::{SimBus, SimConfig};
 use drivers::sim::firmware::{A1Model, SimMotor};
@@ -115,14 +115,8 @@ impl<B: MotorBus> BusWrapper for Counting<B> {
     fn inner_mut(&mut self) -> &mut B {
         &mut self.bus
     }
-    fn wrapped_exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> drivers::bus::Result<ExchangeReport> {
+    fn before_exchange(&mut self) {
         self.exchanges += 1;
-        self.bus.exchange(commands, replies, budget)
     }
 }
 

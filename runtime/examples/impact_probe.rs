@@ -22,9 +22,7 @@
 //! error, rate error, its momentum per unit rate; then step, t, τ, θ̇, σ, x_c − x_f, pitch
 //! rate, the controller's phase). The truth is for diagnosis only: the controller never sees it.
 
-use core::time::Duration;
-use drivers::a1::{Command, Reply};
-use drivers::bus::{BusWrapper, ExchangeReport, MotorBus};
+use drivers::bus::BusWrapper;
 use drivers::imu::{Imu, ImuError, ImuSample};
 use drivers::sim::bus::SimBus;
 use drivers::sim::robot::{RobotSim, SimEvent};
@@ -60,13 +58,7 @@ impl BusWrapper for Recorder {
     fn inner_mut(&mut self) -> &mut Self::Inner {
         &mut self.bus
     }
-    fn wrapped_exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> drivers::bus::Result<ExchangeReport> {
-        let r = self.bus.exchange(commands, replies, budget);
+    fn after_exchange(&mut self) {
         let p = self.bus.plant();
         self.recs.push(Rec {
             t_s: p.time_s(),
@@ -76,7 +68,6 @@ impl BusWrapper for Recorder {
             steps: self.progress.steps,
             phase: self.progress.phase,
         });
-        r
     }
 }
 

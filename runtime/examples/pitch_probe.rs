@@ -23,9 +23,7 @@
 //! environment the run is logged (MCAP). The truth is for diagnosis only: the shipped
 //! controller never sees it.
 
-use core::time::Duration;
-use drivers::a1::{Command, Reply};
-use drivers::bus::{BusWrapper, ExchangeReport, MotorBus};
+use drivers::bus::BusWrapper;
 use drivers::imu::{Imu, ImuError, ImuSample};
 use drivers::sim::bus::SimBus;
 use drivers::sim::robot::{RobotSim, SimEvent};
@@ -86,15 +84,8 @@ impl BusWrapper for Probe {
     fn inner_mut(&mut self) -> &mut Self::Inner {
         &mut self.bus
     }
-    fn wrapped_exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> drivers::bus::Result<ExchangeReport> {
-        let r = self.bus.exchange(commands, replies, budget);
+    fn after_exchange(&mut self) {
         self.q_after.push(self.bus.plant().q().to_vec());
-        r
     }
 }
 

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 ///         h = step_lean_gain_rad_per_mps after a fast step,  + forward: the step lean)
 ///             slow_step_lean_gain_rad_per_mps after a slow one,
 ///             times clamp((σ − step_lean_from_mps) / (step_lean_full_mps − step_lean_from_mps), 0, 1)
-/// a step with |v_k − b − offset| > disturbance_settle_mps: for disturbance_settle_steps
+/// a step with v_k − b − offset > disturbance_settle_mps: for disturbance_settle_steps
 ///         impacts v_cmd = max(b + offset, v_k − max_change_per_step_mps), no lever, no I
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -150,9 +150,9 @@ pub struct SpeedConfig {
     /// `first_step_unlimited` after a Walk from Stand) and the integral starts again from 0.
     #[serde(default)]
     pub belt_change_unlimited_mps: f64,
-    /// A disturbance (a push) seen at an impact: a step whose speed departs from the
-    /// operator's (belt + offset) by more than this, m/s, starts a settle (0, the default:
-    /// off). For `disturbance_settle_steps` impacts after the last such step the reference
+    /// A disturbance (a forward push) seen at an impact: a step faster than the operator's
+    /// speed (belt + offset) by more than this, m/s, starts a settle (0, the default: off; a
+    /// slow step never does: following the robot down only means something after a fast one). For `disturbance_settle_steps` impacts after the last such step the reference
     /// follows the estimate, the step lever and the integral rest, and the command follows the
     /// robot down: the last step's speed less `max_change_per_step_mps`, never below the
     /// operator's (the first such impact sets σ without the step limit); then the reference

@@ -19,9 +19,10 @@
 //! over the stance foot. How fast: from the gait's own stance (Stand after Ramp), the speed at
 //! which the robot's angular momentum about the stance foot equals the planned orbit's σ*(θ) at
 //! the end pose's stance-leg angle (`orbit_table`: the gait's zero dynamics), and the rear foot
-//! lifts as soon as the *measured* momentum reaches σ*(θ) (0.9–1 s into the launch); after a
-//! Stop, a fixed 0.2 m/s, or faster when it must end further back (an inverted pendulum of height
-//! z from x behind passes over at v > |x|·√(g/z)), and the rear foot lifts at 1 s.
+//! lifts as soon as the *measured* momentum (the walk's σ, [`Geometry::pinned_momentum`])
+//! reaches σ*(θ) (0.9–1 s into the launch); after a Stop, a fixed 0.2 m/s, or faster when it
+//! must end further back (an inverted pendulum of height z from x behind passes over at
+//! v > |x|·√(g/z)), and the rear foot lifts at 1 s.
 //!
 //! # The restart of a re-planned gait (what the braking step decides, and what is left)
 //! The shipped default gait (`configs/gaits/adam_codesign.json`) is planned on the graded mesh
@@ -171,7 +172,7 @@
 //! law; an initiation step from the wide stance is the open lead.
 
 use crate::slots::LEG_SLOTS;
-use model::robot::{Legs, PlanarModel, Side, MAX_DOF};
+use model::robot::{BodyInertia, Legs, PlanarModel, Side, MAX_BODIES, MAX_DOF};
 
 /// Torso origin x, z (m) and pitch (rad), relative to the stance foot.
 pub type TorsoPose = [f64; 3];
@@ -341,10 +342,14 @@ impl Geometry<'_> {
             .ok()
     }
 
-    /// Angular momentum about the `stance` foot (at the origin, both feet still) of the robot
-    /// with the torso at `pose` moving at `rate` and the legs at (`leg_q`, `leg_dq`), kg·m²/s.
+    /// Angular momentum σ about the `stance` foot of the robot with the torso at `pose` moving
+    /// at `rate` and the legs at (`leg_q`, `leg_dq`), kg·m²/s: [`Self::pinned_momentum`] of that
+    /// state, so the launch's hand-over measures the walk's σ. The torso's x and z rates are
+    /// those that keep the stance foot still, which `rate` already is when it comes from
+    /// [`Self::measure`] or [`Self::solve`].
     pub fn angular_momentum(
         &self,
+        stance: Side,
         pose: TorsoPose,
         rate: TorsoPose,
         leg_q: &[f64; LEG_SLOTS],
@@ -356,9 +361,8 @@ impl Geometry<'_> {
         for k in 0..LEG_SLOTS {
             dq[self.leg_coord[k]] = leg_dq[k];
         }
-        self.model
-            .angular_momentum_about(&q[..self.dof], &dq[..self.dof], [0.0, 0.0])
-            .ok()
+        self.pinned_momentum(stance, &q, &dq)
+            .map(|(sigma, _)| sigma)
     }
 
     /// Angular momentum σ about the `stance` foot of the robot at `q` moving at `dq`, the base's
@@ -399,20 +403,7 @@ impl Geometry<'_> {
     ) -> Option<[f64; LEG_SLOTS]> {
         let q = self.config(pose, leg_q);
         let st = self.model.body_poses(&q[..self.dof]).ok()?;
-        let mut g = [0.0; MAX_DOF];
-        for (b, body) in self.model.bodies.iter().enumerate() {
-            let m = body.inertia.mass_kg;
-            if m == 0.0 {
-                continue;
-            }
-            let com = self.model.point_position(&st, b, body.inertia.com_xz_m);
-            let w = m * self.model.gravity_mps2;
-            self.model.point_jacobian_into(&st, b, com, |row, col, v| {
-                if row == 1 {
-                    g[col] += v * w;
-                }
-            });
-        }
+        let g = self.gravity_forces(&st)?;
         let mut jb = [[0.0; 3]; 4];
         let mut jl = [[0.0; LEG_SLOTS]; 4];
         for (f, side) in [stance, stance.other()].into_iter().enumerate() {
@@ -443,6 +434,28 @@ impl Geometry<'_> {
             *uk = g[self.leg_coord[k]] - (0..4).map(|r| jl[r][k] * lambda[r]).sum::<f64>();
         }
         Some(u)
+    }
+
+    /// The generalized gravity forces G(q) of the robot at rest in the body states `st` (computed
+    /// with zero velocities, [`PlanarModel::body_poses`]), N or N·m by coordinate: the model's
+    /// inverse dynamics at q̇ = 0, q̈ = 0 ([`PlanarModel::inverse_dynamics_in`]). `None` if the
+    /// model has more bodies than [`MAX_BODIES`]. Never allocates.
+    fn gravity_forces(&self, st: &model::kinematics::BodyStates<f64>) -> Option<[f64; MAX_DOF]> {
+        let bodies = self.model.bodies.len();
+        let mut inertias = [BodyInertia::ZERO; MAX_BODIES];
+        for (slot, body) in inertias.iter_mut().zip(&self.model.bodies) {
+            *slot = body.inertia;
+        }
+        let mut g = [0.0; MAX_DOF];
+        self.model
+            .inverse_dynamics_in(
+                inertias.get(..bodies)?,
+                st,
+                &[0.0; MAX_DOF][..self.dof],
+                &mut g[..self.dof],
+            )
+            .ok()?;
+        Some(g)
     }
 
     /// ∂(foot position)/∂(hip, knee) of one leg: a 2 × 2 matrix, rows x and z.
@@ -691,6 +704,114 @@ mod tests {
         let limp = speed_after(&torques_for(0.0));
         assert!(held < 1e-3, "held: {held}");
         assert!(limp > 0.1, "limp: {limp}");
+    }
+
+    #[test]
+    fn the_launch_momentum_is_the_pinned_momentum_of_the_walk() {
+        let fixture = Fixture::new();
+        let g = fixture.geometry();
+        let warm = [0.2, 0.4, 0.2, 0.4];
+        for (stance, pose, rate, other) in [
+            (
+                Side::Right,
+                [-0.08, 0.64, 0.03],
+                [1.0, 0.0, 0.0],
+                [-0.2, 0.0],
+            ),
+            (
+                Side::Left,
+                [-0.15, 0.62, -0.05],
+                [0.3, -0.1, 0.4],
+                [-0.3, 0.0],
+            ),
+            (
+                Side::Right,
+                [0.02, 0.66, 0.10],
+                [0.25, 0.05, -0.2],
+                [-0.1, 0.01],
+            ),
+        ] {
+            let (leg_q, leg_dq) = g.solve(stance, pose, rate, other, &warm).unwrap();
+            // The launch's end speed (from `solve`) and its hand-over (from `measure`).
+            let m = g
+                .measure(stance, pose[2], rate[2], &leg_q, &leg_dq)
+                .unwrap();
+            for (pose, rate) in [(pose, rate), (m.pose, m.rate)] {
+                // σ about the origin (the stance foot) with the torso's rates as given.
+                let q = g.config(pose, &leg_q);
+                let mut dq = [0.0; MAX_DOF];
+                dq[..3].copy_from_slice(&rate);
+                for k in 0..LEG_SLOTS {
+                    dq[g.leg_coord[k]] = leg_dq[k];
+                }
+                let about_origin = g
+                    .model
+                    .angular_momentum_about(&q[..g.dof], &dq[..g.dof], [0.0, 0.0])
+                    .unwrap();
+                let (pinned, foot) = g.pinned_momentum(stance, &q, &dq).unwrap();
+                let launch = g
+                    .angular_momentum(stance, pose, rate, &leg_q, &leg_dq)
+                    .unwrap();
+                assert!(foot[0].abs() < 1e-9 && foot[1].abs() < 1e-9, "{foot:?}");
+                assert!(
+                    (about_origin - pinned).abs() < 1e-9,
+                    "{stance:?} {pose:?}: {about_origin} vs {pinned}"
+                );
+                assert_eq!(launch, pinned);
+                assert!(pinned.abs() > 0.1, "{pinned}");
+            }
+        }
+    }
+
+    /// G(q) summed by hand: each body's weight through the vertical row of its centre of mass's
+    /// Jacobian (the sum `gravity_torques` used before it took the model's inverse dynamics).
+    fn gravity_forces_by_hand(g: &Geometry<'_>, q: &[f64; MAX_DOF]) -> [f64; MAX_DOF] {
+        let model = g.model;
+        let st = model.body_poses(&q[..g.dof]).unwrap();
+        let mut out = [0.0; MAX_DOF];
+        for (b, body) in model.bodies.iter().enumerate() {
+            let m = body.inertia.mass_kg;
+            if m == 0.0 {
+                continue;
+            }
+            let com = model.point_position(&st, b, body.inertia.com_xz_m);
+            let w = m * model.gravity_mps2;
+            model.point_jacobian_into(&st, b, com, |row, col, v| {
+                if row == 1 {
+                    out[col] += v * w;
+                }
+            });
+        }
+        out
+    }
+
+    #[test]
+    fn gravity_forces_from_the_inverse_dynamics_match_the_sum_by_hand() {
+        let fixture = Fixture::new();
+        let g = fixture.geometry();
+        let warm = [0.2, 0.4, 0.2, 0.4];
+        for (stance, pose, other) in [
+            (Side::Right, [-0.08, 0.64, 0.03], [-0.2, 0.0]),
+            (Side::Left, [-0.15, 0.62, -0.05], [-0.3, 0.0]),
+            (Side::Right, [0.02, 0.66, 0.10], [-0.1, 0.01]),
+            (Side::Left, [-0.20, 0.58, 0.0], [-0.35, -0.02]),
+        ] {
+            let (leg_q, _) = g.solve(stance, pose, [0.0; 3], other, &warm).unwrap();
+            let q = g.config(pose, &leg_q);
+            let st = g.model.body_poses(&q[..g.dof]).unwrap();
+            let from_model = g.gravity_forces(&st).unwrap();
+            let by_hand = gravity_forces_by_hand(&g, &q);
+            for c in 0..g.dof {
+                assert!(
+                    (from_model[c] - by_hand[c]).abs() < 1e-9,
+                    "{stance:?} {pose:?}, coordinate {c}: {} vs {}",
+                    from_model[c],
+                    by_hand[c]
+                );
+            }
+            // Not all zero: the robot has weight.
+            assert!(by_hand[1] > 100.0, "{by_hand:?}");
+        }
     }
 
     #[test]

@@ -7,14 +7,13 @@ use crate::backend::{Backend, WalkProgress};
 use crate::rt_loop::Clock;
 use crate::sim::faults::{Fault, FaultProfile, ScheduledFault};
 use crate::{Result, RuntimeError, Setup};
-use core::time::Duration;
-use drivers::a1::{Command, ErrorFlags, MotorId, Reply};
-use drivers::bus::{BusWrapper, ExchangeReport, MotorBus};
+use drivers::a1::{ErrorFlags, MotorId};
+use drivers::bus::BusWrapper;
 use drivers::imu::{Imu, ImuError, ImuFault, ImuSample};
 use drivers::sim::bus::SimBus;
 use drivers::sim::robot::RobotSim;
 
-/// The simulated robot with faults applied on schedule: a loop backend ([`MotorBus`] + [`Imu`]).
+/// The simulated robot with faults applied on schedule: a loop backend ([`MotorBus`](drivers::bus::MotorBus) + [`Imu`]).
 ///
 /// Before each exchange, at the simulated time of the period about to run, faults whose end has
 /// come are healed, then faults whose start has come are applied. A hot motor is not cooled at
@@ -240,15 +239,9 @@ impl BusWrapper for FaultySim {
     fn inner_mut(&mut self) -> &mut Self::Inner {
         &mut self.bus
     }
-    fn wrapped_exchange(
-        &mut self,
-        commands: &[Command],
-        replies: &mut [Reply],
-        budget: Duration,
-    ) -> drivers::bus::Result<ExchangeReport> {
+    fn before_exchange(&mut self) {
         let t_s = self.bus.time_s();
         self.apply(t_s);
-        self.bus.exchange(commands, replies, budget)
     }
 }
 

@@ -169,7 +169,7 @@ impl Controller {
         let g = self.geometry();
         let unit = [1.0, 0.0, 0.0];
         let (q, dq) = g.solve(self.stance, to, unit, other_foot_xz_m, warm)?;
-        let sigma_per_mps = g.angular_momentum(to, unit, &q, &dq)?;
+        let sigma_per_mps = g.angular_momentum(self.stance, to, unit, &q, &dq)?;
         let theta = g.stance_leg_angle(self.stance, to, &q)?;
         let v = table.sigma_at(theta) / sigma_per_mps;
         (v.is_finite() && v > 0.0).then_some(v)
@@ -200,7 +200,7 @@ impl Controller {
         let Some(m) = g.measure(self.stance, pitch, pitch_rate, leg_q, leg_dq) else {
             return false;
         };
-        let sigma = g.angular_momentum(m.pose, m.rate, leg_q, leg_dq);
+        let sigma = g.angular_momentum(self.stance, m.pose, m.rate, leg_q, leg_dq);
         let theta = g.stance_leg_angle(self.stance, m.pose, leg_q);
         match (sigma, theta) {
             (Some(s), Some(th)) => s >= table.sigma_at(th),

@@ -535,15 +535,19 @@
 //! step until one starts with too little momentum.
 //!
 //! **The disturbance settle (kept; `disturbance_settle_mps` 0.13, `disturbance_settle_steps` 6
-//! in the treadmill config, off by default).** The same trigger (a step more than 0.13 m/s off
-//! the operator's speed, not in a Stop nor in the steps after a launch), but the command follows
+//! in the treadmill config, off by default).** The trigger: a step more than 0.13 m/s faster
+//! than the operator's speed (not in a Stop nor in the steps after a launch); the command follows
 //! the robot: the last step's speed less `max_change_per_step_mps` (0.02 m/s), never below the
 //! operator's; the first such impact sets σ without the step limit (the gait that walks the
 //! pushed robot's speed, up to the library's top), the next ones come down by the step limit;
 //! the lever and the integral rest and the reference follows the estimate for 6 impacts after
 //! the last disturbed step, then glides back at `reference_glide_mps`. A slow step (a backward
-//! push, a relaunch) settles at the operator's speed. From the controller's own measurements
-//! only (the step's length and duration, the operator's belt speed). `adam bench treadmill
+//! push, a relaunch) starts no settle: following the robot down means nothing below the belt,
+//! and the position loop acts (until 2026-12-06 a step 0.13 m/s slower triggered it too and the
+//! command held the operator's speed; dropping that changed nothing in `adam bench treadmill
+//! --config configs/runtime/adam_treadmill.toml`, seeds 1–5 and `--seeds 6,7,8,9,10`, every
+//! table figure for figure). From the controller's own measurements only (the step's length
+//! and duration, the operator's belt speed). `adam bench treadmill
 //! --config configs/runtime/adam_treadmill.toml` (seeds 1–5): +40 N rides through 0, 1, 0, 3, 0
 //! of 5 at 10/30/50/70/90 % (+1 walked on after a relaunch at 50 %; the rest: joint limits ×7,
 //! off the front of the belt ×5, step timeouts ×3, falls ×2, torque saturations ×2, an

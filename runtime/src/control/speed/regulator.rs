@@ -284,15 +284,16 @@ impl SpeedRegulator {
         } else {
             self.config.position_gain_per_s
         };
-        // A disturbed step (a push): its speed departs from the operator's by more than
-        // `speed.disturbance_settle_mps` (not in a Stop, nor in the steps after a launch).
+        // A disturbed step (a forward push): faster than the operator's speed by more than
+        // `speed.disturbance_settle_mps` (not in a Stop, nor in the steps after a launch). A
+        // slow step is left to the position loop: following the robot down means nothing there.
         let threshold = self.config.disturbance_settle_mps;
         let operator_mps = s.belt_mps + s.offset_mps;
         if measured
             && threshold > 0.0
             && self.stop.is_none()
             && self.steps_since_walk >= self.config.integral_delay_steps
-            && (s.step_speed_mps - operator_mps).abs() > threshold
+            && s.step_speed_mps - operator_mps > threshold
             && !(self.disturbed && self.settle_left > 0)
             && !self.previous_off
         {
@@ -304,7 +305,7 @@ impl SpeedRegulator {
         // A robot that stays that far off is not pushed (a stumble's run-on, a fast gait):
         // only a step off after one on the belt's speed starts a settle.
         if measured {
-            self.previous_off = (s.step_speed_mps - operator_mps).abs() > threshold;
+            self.previous_off = s.step_speed_mps - operator_mps > threshold;
         }
         // The reference: following the estimate while the robot settles after the belt started
         // or a disturbance, then gliding back to the centre; a Stop's target ahead.
@@ -772,10 +773,12 @@ mod tests {
         r.belt_travel_m = 0.125;
         r.on_impact(0.125, 0.5, (0.15, 0.40));
         assert!(r.status.requested_mps < 0.25 && r.status.requested_mps > 0.24);
-        // A slow step (a backward push) settles at the belt's speed; off (0) nothing settles.
+        // A slow step (a backward push, 0.1 m/s: 0.15 m/s below the belt's) starts no settle:
+        // the position loop asks for more than the belt's speed; off (0) nothing settles.
         r.belt_travel_m = 0.125;
         r.on_impact(0.05, 0.5, (0.15, 0.40));
-        assert_eq!(r.status.requested_mps, 0.25);
+        assert_eq!((r.settle_left, r.disturbed), (0, false));
+        assert!(r.status.requested_mps > 0.25, "{}", r.status.requested_mps);
         let mut r = regulator(&start_config());
         r.belt_travel_m = 0.2;
         r.on_impact(0.2, 0.8, (0.15, 0.40));
