@@ -444,7 +444,8 @@ impl SpeedRegulator {
     /// gait, chosen at the impact, stays). Ignored if not finite or over
     /// [`MAX_STEP_LENGTH_CORRECTION_M`].
     pub(in crate::control) fn correct_step_length(&mut self, delta_m: f64) {
-        if !(delta_m.abs() <= MAX_STEP_LENGTH_CORRECTION_M)
+        if !delta_m.is_finite()
+            || delta_m.abs() > MAX_STEP_LENGTH_CORRECTION_M
             || !self.status.step_length_m.is_finite()
         {
             return;
