@@ -35,7 +35,8 @@ pub(in crate::control) struct StepLever {
     pub(in crate::control) theta_per_m: f64,
     /// This step's length offset, m (0: the gait's own step).
     pub(in crate::control) offset_m: f64,
-    /// +1 or −1: the hip offset that moves the centre of mass forward at mid-step.
+    /// +1 or −1: the hip offset that moves the centre of mass forward at mid-step (0: none
+    /// does, no lean).
     pub(in crate::control) lean_sign: f64,
     /// This step's torso lean, rad (+ forward; 0: the gait's own): both hips offset by
     /// `lean_sign`·`lean_rad` for the whole step (a change at an impact blends in with the
@@ -119,7 +120,9 @@ impl StepLever {
             dy_end_per_m,
             theta_per_m,
             offset_m: 0.0,
-            lean_sign: lean_sign(geometry, gait)?,
+            // 0 where the hips do not move the centre of mass: that gait cannot lean (the
+            // step lever's slopes do not depend on it).
+            lean_sign: lean_sign(geometry, gait).unwrap_or(0.0),
             lean_rad: 0.0,
         };
         let finite =

@@ -289,14 +289,14 @@ impl SpeedRegulator {
         // slow step is left to the position loop: following the robot down means nothing there.
         let threshold = self.config.disturbance_settle_mps;
         let operator_mps = s.belt_mps + s.offset_mps;
-        if measured
+        let pushed = measured
             && threshold > 0.0
             && self.stop.is_none()
             && self.steps_since_walk >= self.config.integral_delay_steps
             && s.step_speed_mps - operator_mps > threshold
             && !(self.disturbed && self.settle_left > 0)
-            && !self.previous_off
-        {
+            && !self.previous_off;
+        if pushed {
             // The first disturbed step: σ goes to the robot's speed at once.
             self.unlimited_next |= !self.disturbed;
             self.settle_left = self.settle_left.max(self.config.disturbance_settle_steps);
@@ -336,12 +336,10 @@ impl SpeedRegulator {
             _ if settling_disturbed => {
                 let follow =
                     operator_mps.max(s.step_speed_mps - self.config.max_change_per_step_mps);
-                if self.settle_left + 1 < self.config.disturbance_settle_steps
-                    && s.requested_mps.is_finite()
-                {
-                    follow.min(s.requested_mps)
-                } else {
+                if pushed {
                     follow
+                } else {
+                    follow.min(s.requested_mps)
                 }
             }
             _ => s.belt_mps + s.offset_mps - k_p * (s.position_m - self.reference_m),

@@ -1,5 +1,5 @@
-//! The step lean and the disturbance settle's command (`runtime::control::speed`, "The step
-//! lean").
+//! The step lean, the disturbance settle's command and the step's length measured again after
+//! the impact (`runtime::control::speed`, "The step lean", "The step's length").
 
 use super::*;
 
@@ -162,4 +162,28 @@ fn a_disturbance_settle_never_raises_the_command_and_does_not_renew_itself() {
     step(&mut r, 0.25);
     step(&mut r, 0.45);
     assert!((r.status.requested_mps - 0.43).abs() < 1e-12);
+}
+
+#[test]
+fn a_step_measured_again_after_the_impact_moves_the_position_and_the_stride() {
+    let config = lean_config();
+    let mut r = walking(&config);
+    // Two steps of 0.175 m in 0.7 s at the belt's travel: the position stays at 0.
+    step(&mut r, 0.25);
+    let before = r.status;
+    r.correct_step_length(0.0006);
+    assert!((r.status.position_m - before.position_m - 0.0006).abs() < 1e-15);
+    assert!((r.status.step_length_m - 0.1756).abs() < 1e-12);
+    assert!((r.status.step_speed_mps - 0.1756 / 0.7).abs() < 1e-12);
+    assert_eq!(
+        r.previous_step.map(|(l, _)| l),
+        Some(r.status.step_length_m)
+    );
+    // The next step's gait, chosen at the impact, stays.
+    assert_eq!(r.status.library_mps, before.library_mps);
+    // More than a centimetre, or not finite: not a measurement, ignored.
+    let kept = r.status;
+    r.correct_step_length(0.011);
+    r.correct_step_length(f64::NAN);
+    assert_eq!(r.status, kept);
 }
