@@ -166,6 +166,15 @@ pub(super) fn pose_at(
 /// Which outputs the lean moves: the stance hip and the swing hip, by the same angle.
 pub(super) const LEAN: [f64; OUTPUTS] = [1.0, 0.0, 1.0, 0.0];
 
+/// Leans the torso of the outputs `y` by `lean_rad`: both hips offset by `sign`·`lean_rad`
+/// ([`LEAN`]; `sign` from [`lean_sign`]: + moves the centre of mass forward), the knees and
+/// the feet unmoved. The orbit lever's lean and the step lean (`speed`) both lean this way.
+pub(super) fn add_lean(y: &mut [f64; OUTPUTS], sign: f64, lean_rad: f64) {
+    for (y, l) in y.iter_mut().zip(LEAN) {
+        *y += sign * l * lean_rad;
+    }
+}
+
 impl OrbitTable {
     /// The planned orbit of `gait` (its `table`): σ*(τ) from its post-impact state through the
     /// zero dynamics. Errors say why (no initial state, a pose off the legs, an orbit that does

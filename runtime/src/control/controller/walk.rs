@@ -4,7 +4,7 @@
 
 use super::Controller;
 use crate::config::PhaseSource;
-use crate::control::orbit::LEAN;
+use crate::control::orbit::add_lean;
 use crate::control::speed::LEVER_BLEND_FROM;
 use crate::control::tick::ControlState;
 use crate::control::transitions::{blend_weight, BRAKE_BLEND_FROM, START_KNEE_BLEND_SPAN};
@@ -166,9 +166,7 @@ impl Controller {
         }
         // The step lean (speed control): both hips offset alike all through the step.
         if !self.braking && lever.lean_rad != 0.0 {
-            for (i, y) in y.iter_mut().enumerate() {
-                *y += lever.lean(i);
-            }
+            lever.add_lean(&mut y);
         }
         let touchdown = phase >= self.switch_min_phase && foot_height_m <= self.touchdown_height_m;
         WalkEval {
@@ -212,10 +210,7 @@ impl Controller {
         // The lean's rate is not fed to ẏ^d: it is the derivative of a filtered noisy error,
         // and through the hips' damping it chattered them (measured: false impacts).
         let (lean, _rate) = self.orbit.update(t_s, eval.phase, sigma, self.stance, on);
-        let sign = self.orbit.sign;
-        for (y, l) in eval.y.iter_mut().zip(LEAN) {
-            *y += sign * l * lean;
-        }
+        add_lean(&mut eval.y, self.orbit.sign, lean);
     }
 
     /// The model's coordinates and rates as measured: the estimated torso pitch and its rate,

@@ -15,7 +15,7 @@
 
 use super::super::double_support::{slots, solve2, Geometry};
 use super::super::gait_table::{side_index, GaitTable};
-use super::super::orbit::{lean_sign, LEAN};
+use super::super::orbit::{add_lean, lean_sign};
 use super::super::transitions::{braking_touchdown, first_pose_torso};
 use crate::slots::{LEG_SLOTS, OUTPUTS};
 use model::robot::MAX_DOF;
@@ -135,9 +135,9 @@ impl StepLever {
         self.offset_m * self.dy_end_per_m[i]
     }
 
-    /// Offset of output `i` by this step's lean, rad (the same all through the step).
-    pub(in crate::control) fn lean(&self, i: usize) -> f64 {
-        self.lean_sign * LEAN[i] * self.lean_rad
+    /// Leans the outputs `y` by this step's lean (the same all through the step).
+    pub(in crate::control) fn add_lean(&self, y: &mut [f64; OUTPUTS]) {
+        add_lean(y, self.lean_sign, self.lean_rad);
     }
 
     /// No longer step, no lean: the gait's own step.
