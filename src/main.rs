@@ -181,10 +181,11 @@ fn dispatch(cli: Cli) -> Result<()> {
                 BenchWhat::Treadmill {
                     seeds,
                     quick,
+                    belts,
                     config,
                     gait,
                 },
-        } => bench::treadmill(seeds, quick, &config, &gait),
+        } => bench::treadmill(seeds, quick, belts.as_deref(), &config, &gait),
         Command::Plot {
             what:
                 PlotWhat::Portrait {

@@ -67,6 +67,10 @@ pub(crate) enum BenchWhat {
         /// A shorter set: 20 s belts, a 30 s belt step, three push points, 3 bisections.
         #[arg(long)]
         quick: bool,
+        /// The constant belts of table (a), m/s: `lo:hi:step` or `v1,v2,…` (default the
+        /// issue's 0.15, 0.20, 0.25, 0.30, 0.35; e.g. `0.15:0.35:0.025` for the speeds between).
+        #[arg(long)]
+        belts: Option<String>,
         /// Runtime config (TOML).
         #[arg(long, default_value = shipped::RUNTIME_CONFIG)]
         config: PathBuf,

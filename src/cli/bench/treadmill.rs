@@ -43,13 +43,14 @@ const QUICK: Sizes = Sizes {
 /// Largest push magnitude the bisection tries, N.
 const PUSH_CEILING_N: f64 = 160.0;
 
-/// The treadmill matrix of `seeds` in table order: (a) belt speeds × seeds, (b) belt steps ×
-/// seeds, (c) push forces × points × seeds, (d) restart cases × seeds. The runs of `adam bench
-/// treadmill` and the tasks of a treadmill sweep plan.
-pub(crate) fn matrix_runs(seeds: &[u64], quick: bool) -> Vec<Run> {
+/// The treadmill matrix of `seeds` in table order: (a) the constant `belts` (m/s; the issue's
+/// [`BELT_SPEEDS_MPS`] unless `adam bench treadmill --belts` names others) × seeds, (b) belt
+/// steps × seeds, (c) push forces × points × seeds, (d) restart cases × seeds. The runs of
+/// `adam bench treadmill` and the tasks of a treadmill sweep plan.
+pub(crate) fn matrix_runs(seeds: &[u64], quick: bool, belts: &[f64]) -> Vec<Run> {
     let sizes = if quick { QUICK } else { FULL };
     let mut runs = Vec::new();
-    for &speed_mps in &BELT_SPEEDS_MPS {
+    for &speed_mps in belts {
         runs.extend(seeds.iter().map(|&seed| Run::ConstantBelt {
             speed_mps,
             duration_s: sizes.constant_s,
@@ -147,7 +148,16 @@ pub(crate) fn tables(
         "{:>9} {:>6} {:>6} {:>18} {:>22}  outcomes",
         "belt m/s", "falls", "trips", "max |position| m", "walking/belt % (mean)"
     )?;
-    for &v in &BELT_SPEEDS_MPS {
+    // The constant belts the matrix ran, in its order.
+    let mut belts: Vec<f64> = Vec::new();
+    for r in runs {
+        if let Run::ConstantBelt { speed_mps, .. } = r {
+            if !belts.contains(speed_mps) {
+                belts.push(*speed_mps);
+            }
+        }
+    }
+    for v in belts {
         let rs = select(
             runs,
             summaries,
@@ -172,9 +182,15 @@ pub(crate) fn tables(
                 ratios.len()
             )
         };
+        // 0.15, 0.175, 0.167: as many decimals as the speed has (up to 3).
+        let belt = if (v * 100.0 - (v * 100.0).round()).abs() < 1e-6 {
+            format!("{v:.2}")
+        } else {
+            format!("{v:.3}")
+        };
         writeln!(
             out,
-            "{v:>9.2} {:>6} {:>6} {:>18} {:>22}  {}",
+            "{belt:>9} {:>6} {:>6} {:>18} {:>22}  {}",
             count(falls, rs.len()),
             count(trips, rs.len()),
             metres(position),
@@ -340,11 +356,13 @@ pub(crate) fn seeds_or_default(seeds: Option<Vec<u64>>, quick: bool) -> Result<V
 pub(crate) fn treadmill(
     seeds: Option<Vec<u64>>,
     quick: bool,
+    belts: Option<&str>,
     config: &std::path::Path,
     gait: &std::path::Path,
 ) -> Result<()> {
     let sizes = if quick { QUICK } else { FULL };
     let seeds = seeds_or_default(seeds, quick)?;
+    let belts = belts_or_default(belts)?;
     let (config, gait) = (
         crate::cli::shipped::input(config),
         crate::cli::shipped::input(gait),
@@ -360,7 +378,7 @@ pub(crate) fn treadmill(
     let wall = std::time::Instant::now();
     let cpu0 = cpu_time_s();
     // Every run of the matrix at once (the tasks of a treadmill sweep plan, the same function).
-    let runs = matrix_runs(&seeds, quick);
+    let runs = matrix_runs(&seeds, quick, &belts);
     let summaries: Vec<Option<RunSummary>> = runs
         .par_iter()
         .map(|r| Ok(Some(matrix::run(&setup, r)?)))
@@ -376,6 +394,23 @@ pub(crate) fn treadmill(
     Ok(())
 }
 
+/// The constant belts of table (a), m/s: `spec` (`lo:hi:step` or `v1,v2,…`; each within
+/// (0, 0.5] m/s, the simulated treadmill's range) or the issue's [`BELT_SPEEDS_MPS`].
+fn belts_or_default(spec: Option<&str>) -> Result<Vec<f64>> {
+    let Some(spec) = spec else {
+        return Ok(BELT_SPEEDS_MPS.to_vec());
+    };
+    let belts =
+        planner::library::parse_speeds(spec).map_err(|e| anyhow::anyhow!("--belts: {e}"))?;
+    if let Some(v) = belts.iter().find(|&&v| v > MAX_BELT_MPS) {
+        bail!("--belts {spec}: {v} m/s is above the treadmill's {MAX_BELT_MPS} m/s");
+    }
+    Ok(belts)
+}
+
+/// The fastest belt `--belts` takes, m/s (the default `treadmill.belt_speed_range_mps`).
+const MAX_BELT_MPS: f64 = 0.5;
+
 /// CPU time of this process so far (user + system), s, from `/proc/self/stat` (Linux).
 fn cpu_time_s() -> Option<f64> {
     let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
@@ -385,4 +420,41 @@ fn cpu_time_s() -> Option<f64> {
     let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
     // USER_HZ is 100 on Linux.
     Some(ticks / 100.0)
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+
+    /// `--belts` absent: the issue's five; a range or a list: those, each a row of table (a)
+    /// for every seed; a belt past the treadmill's range or a bad list: an error naming the
+    /// option and the value.
+    #[test]
+    fn the_belts_of_table_a_are_the_issues_or_those_asked_for() {
+        assert_eq!(belts_or_default(None).unwrap(), BELT_SPEEDS_MPS.to_vec());
+        let belts = belts_or_default(Some("0.15:0.35:0.025")).unwrap();
+        assert_eq!(belts.len(), 9);
+        assert_eq!((belts[0], belts[3], belts[8]), (0.15, 0.225, 0.35));
+        let runs = matrix_runs(&[1, 2], true, &[0.16, 0.167]);
+        let constant: Vec<(f64, u64)> = runs
+            .iter()
+            .filter_map(|r| match r {
+                Run::ConstantBelt {
+                    speed_mps, seed, ..
+                } => Some((*speed_mps, *seed)),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(constant, [(0.16, 1), (0.16, 2), (0.167, 1), (0.167, 2)]);
+        for (spec, what) in [
+            ("0.2,0.6", "0.6"),
+            ("0.3,0.2", "0.3,0.2"),
+            ("0.1:0.2", "0.1:0.2"),
+            ("fast", "fast"),
+        ] {
+            let e = belts_or_default(Some(spec)).unwrap_err().to_string();
+            assert!(e.contains("--belts") && e.contains(what), "{spec}: {e}");
+        }
+    }
 }

@@ -9,6 +9,7 @@ use super::plan::{Input, SweepPlan, Task, TreadmillSettings};
 use super::result::{Payload, TaskResult};
 use crate::cli::bench::{matrix_runs, seeds_or_default, treadmill_tables};
 use anyhow::{Context, Result};
+use runtime::sim::scenarios::BELT_SPEEDS_MPS;
 use std::path::Path;
 
 /// The roles of the treadmill study's inputs.
@@ -52,7 +53,7 @@ pub(crate) fn plan(
             inputs.push(Input::hashed(LIBRARY_ROBOT, &lib_urdf)?);
         }
     }
-    let tasks = matrix_runs(&seeds, quick)
+    let tasks = matrix_runs(&seeds, quick, &BELT_SPEEDS_MPS)
         .into_iter()
         .enumerate()
         .map(|(index, run)| Task {
