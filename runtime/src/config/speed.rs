@@ -80,7 +80,8 @@ pub struct SpeedConfig {
     /// ones). 0, the default: in full at every σ.
     #[serde(default)]
     pub step_lean_full_mps: f64,
-    /// Below this library speed σ, no step lean, m/s (see `step_lean_full_mps`).
+    /// Below this library speed σ, no step lean, m/s (see `step_lean_full_mps`; below it,
+    /// unless both are 0).
     #[serde(default)]
     pub step_lean_from_mps: f64,
     /// Measure each step's length again at the tick after an impact felt by the IMU (both feet
@@ -88,7 +89,7 @@ pub struct SpeedConfig {
     /// tick predates the impact (`runtime::control::speed`, "The step's length"). Off by default.
     #[serde(default)]
     pub step_length_after_impact: bool,
-    /// The step lean stays within ± this, rad.
+    /// The step lean stays within ± this, rad (above 0 when a lean gain is, at most 0.5).
     #[serde(default)]
     pub max_step_lean_rad: f64,
     /// Where the position on the belt comes from: leg odometry (the belt speed set by the
@@ -152,7 +153,8 @@ pub struct SpeedConfig {
     pub belt_change_unlimited_mps: f64,
     /// A disturbance (a forward push) seen at an impact: a step faster than the operator's
     /// speed (belt + offset) by more than this, m/s, starts a settle (0, the default: off; a
-    /// slow step never does: following the robot down only means something after a fast one). For `disturbance_settle_steps` impacts after the last such step the reference
+    /// slow step never does: following the robot down only means something after a fast
+    /// one). For `disturbance_settle_steps` impacts after the last such step the reference
     /// follows the estimate, the step lever and the integral rest, and the command follows the
     /// robot down: the last step's speed less `max_change_per_step_mps`, never below the
     /// operator's (the first such impact sets σ without the step limit); then the reference
@@ -312,6 +314,42 @@ impl SpeedConfig {
                 });
             }
         }
+        // The step lean: a gain with no room to lean, or a fade that does not rise, would
+        // leave it silently off or in full everywhere.
+        let bad = |field: &str, v: f64, reason: String| RuntimeError::InvalidField {
+            origin: origin.to_string(),
+            field: field.into(),
+            value: v.to_string(),
+            reason,
+        };
+        let leans =
+            self.step_lean_gain_rad_per_mps > 0.0 || self.slow_step_lean_gain_rad_per_mps > 0.0;
+        if leans && self.max_step_lean_rad == 0.0 {
+            return Err(bad(
+                "speed.max_step_lean_rad",
+                self.max_step_lean_rad,
+                "must be above 0 when a step lean gain is (the lean is clamped to it)".into(),
+            ));
+        }
+        if self.max_step_lean_rad > 0.5 {
+            return Err(bad(
+                "speed.max_step_lean_rad",
+                self.max_step_lean_rad,
+                "must be at most 0.5 rad (a larger lean takes the torso far off the gait's pose)"
+                    .into(),
+            ));
+        }
+        let (from, full) = (self.step_lean_from_mps, self.step_lean_full_mps);
+        if !(from == 0.0 && full == 0.0) && from >= full {
+            return Err(bad(
+                "speed.step_lean_from_mps",
+                from,
+                format!(
+                    "must be below speed.step_lean_full_mps = {full} m/s (the lean's share \
+                     grows from 0 there to 1 at full; both 0: in full at every speed)"
+                ),
+            ));
+        }
         if self.launch_gait_fraction > 1.0 {
             return Err(RuntimeError::InvalidField {
                 origin: origin.to_string(),
@@ -367,6 +405,71 @@ mod tests {
             assert!(e.contains(&bad.to_string()), "{e}");
         }
         assert!(SpeedConfig::default().validate("adam.toml").is_ok());
+    }
+
+    /// A lean gain without a limit, a limit past 0.5 rad, or a fade that does not rise is
+    /// refused naming the field and the value; the treadmill config's options pass.
+    #[test]
+    fn a_step_lean_that_could_not_act_as_set_is_refused() {
+        let options = SpeedConfig {
+            step_lean_gain_rad_per_mps: 0.2,
+            slow_step_lean_gain_rad_per_mps: 0.1,
+            max_step_lean_rad: 0.006,
+            step_lean_from_mps: 0.16,
+            step_lean_full_mps: 0.22,
+            ..SpeedConfig::default()
+        };
+        assert!(options.validate("t.toml").is_ok());
+        let cases = [
+            (
+                "speed.max_step_lean_rad",
+                "0",
+                SpeedConfig {
+                    max_step_lean_rad: 0.0,
+                    ..options.clone()
+                },
+            ),
+            (
+                "speed.max_step_lean_rad",
+                "0.6",
+                SpeedConfig {
+                    max_step_lean_rad: 0.6,
+                    ..options.clone()
+                },
+            ),
+            (
+                "speed.step_lean_from_mps",
+                "0.22",
+                SpeedConfig {
+                    step_lean_from_mps: 0.22,
+                    ..options.clone()
+                },
+            ),
+            (
+                "speed.step_lean_from_mps",
+                "0.1",
+                SpeedConfig {
+                    step_lean_from_mps: 0.1,
+                    step_lean_full_mps: 0.0,
+                    ..options.clone()
+                },
+            ),
+        ];
+        for (field, value, c) in cases {
+            let e = c.validate("t.toml").expect_err("refused").to_string();
+            assert!(
+                e.contains("t.toml") && e.contains(field) && e.contains(value),
+                "{e}"
+            );
+        }
+        // In full at every speed (both 0), and off (no gain, no limit): accepted.
+        let everywhere = SpeedConfig {
+            step_lean_from_mps: 0.0,
+            step_lean_full_mps: 0.0,
+            ..options
+        };
+        assert!(everywhere.validate("t.toml").is_ok());
+        assert!(SpeedConfig::default().validate("t.toml").is_ok());
     }
 
     #[test]

@@ -362,12 +362,12 @@ pub(crate) fn treadmill(
 ) -> Result<()> {
     let sizes = if quick { QUICK } else { FULL };
     let seeds = seeds_or_default(seeds, quick)?;
-    let belts = belts_or_default(belts)?;
     let (config, gait) = (
         crate::cli::shipped::input(config),
         crate::cli::shipped::input(gait),
     );
     let setup = runtime::Setup::load(&config, &gait)?;
+    let belts = belts_or_default(belts, &setup.config.treadmill)?;
     println!(
         "adam bench treadmill: {} (its speed {:.3} m/s), {} cores{}",
         gait.display(),
@@ -394,22 +394,23 @@ pub(crate) fn treadmill(
     Ok(())
 }
 
-/// The constant belts of table (a), m/s: `spec` (`lo:hi:step` or `v1,v2,…`; each within
-/// (0, 0.5] m/s, the simulated treadmill's range) or the issue's [`BELT_SPEEDS_MPS`].
-fn belts_or_default(spec: Option<&str>) -> Result<Vec<f64>> {
+/// The constant belts of table (a), m/s: `spec` (`lo:hi:step` or `v1,v2,…`; each within the
+/// runtime config's `treadmill` range, as `adam run --belt`) or the issue's
+/// [`BELT_SPEEDS_MPS`].
+fn belts_or_default(
+    spec: Option<&str>,
+    treadmill: &runtime::config::TreadmillConfig,
+) -> Result<Vec<f64>> {
     let Some(spec) = spec else {
         return Ok(BELT_SPEEDS_MPS.to_vec());
     };
     let belts =
         planner::library::parse_speeds(spec).map_err(|e| anyhow::anyhow!("--belts: {e}"))?;
-    if let Some(v) = belts.iter().find(|&&v| v > MAX_BELT_MPS) {
-        bail!("--belts {spec}: {v} m/s is above the treadmill's {MAX_BELT_MPS} m/s");
+    for &v in &belts {
+        treadmill.check_belt_speed("--belts", v)?;
     }
     Ok(belts)
 }
-
-/// The fastest belt `--belts` takes, m/s (the default `treadmill.belt_speed_range_mps`).
-const MAX_BELT_MPS: f64 = 0.5;
 
 /// CPU time of this process so far (user + system), s, from `/proc/self/stat` (Linux).
 fn cpu_time_s() -> Option<f64> {
@@ -432,8 +433,12 @@ mod tests {
     /// option and the value.
     #[test]
     fn the_belts_of_table_a_are_the_issues_or_those_asked_for() {
-        assert_eq!(belts_or_default(None).unwrap(), BELT_SPEEDS_MPS.to_vec());
-        let belts = belts_or_default(Some("0.15:0.35:0.025")).unwrap();
+        let treadmill = runtime::config::TreadmillConfig::default();
+        assert_eq!(
+            belts_or_default(None, &treadmill).unwrap(),
+            BELT_SPEEDS_MPS.to_vec()
+        );
+        let belts = belts_or_default(Some("0.15:0.35:0.025"), &treadmill).unwrap();
         assert_eq!(belts.len(), 9);
         assert_eq!((belts[0], belts[3], belts[8]), (0.15, 0.225, 0.35));
         let runs = matrix_runs(&[1, 2], true, &[0.16, 0.167]);
@@ -453,8 +458,21 @@ mod tests {
             ("0.1:0.2", "0.1:0.2"),
             ("fast", "fast"),
         ] {
-            let e = belts_or_default(Some(spec)).unwrap_err().to_string();
+            let e = belts_or_default(Some(spec), &treadmill)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("--belts") && e.contains(what), "{spec}: {e}");
         }
+        // The range is the config's: a treadmill up to 0.3 m/s refuses 0.35.
+        let slow = runtime::config::TreadmillConfig {
+            belt_speed_range_mps: [0.0, 0.3],
+        };
+        let e = belts_or_default(Some("0.2,0.35"), &slow)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--belts") && e.contains("0.35") && e.contains("0.3]"),
+            "{e}"
+        );
     }
 }
