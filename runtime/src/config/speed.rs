@@ -108,6 +108,12 @@ pub struct SpeedConfig {
     /// calibration").
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub walked_mps: Vec<f64>,
+    /// A walk begun in its gait's own state starts with the integral at the calibration's
+    /// offset there, c(σ) − σ (false, the default: at 0): its first steps ask for the gait they
+    /// started on, which walks its plan at first, and the integral takes the creep to c(σ) up
+    /// as the steps show it (`runtime::control::speed::regulator`, "The start on the plan").
+    #[serde(default)]
+    pub start_on_plan: bool,
     /// How far below the slowest library gait σ may go, m/s (0, the default: not at all): the
     /// gait there extrapolates the two slowest linearly. Room for the regulator below a belt
     /// that the slowest gait walks faster than.
@@ -216,6 +222,7 @@ impl Default for SpeedConfig {
             position_source: PositionSource::Odometry,
             library: None,
             walked_mps: Vec::new(),
+            start_on_plan: false,
             below_library_mps: 0.0,
             lever_below_library: false,
             launch_gait_fraction: 0.0,
@@ -371,6 +378,16 @@ impl SpeedConfig {
                 reason: "must be positive and finite".into(),
             });
         }
+        if self.start_on_plan && self.walked_mps.is_empty() {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "speed.start_on_plan".into(),
+                value: "true".into(),
+                reason: "needs speed.walked_mps: without a calibration the integral would start \
+                         at 0, as with the option off"
+                    .into(),
+            });
+        }
         for (k, pair) in self.walked_mps.windows(2).enumerate() {
             if pair[1] <= pair[0] {
                 return Err(RuntimeError::InvalidField {
@@ -405,6 +422,25 @@ mod tests {
             assert!(e.contains(&bad.to_string()), "{e}");
         }
         assert!(SpeedConfig::default().validate("adam.toml").is_ok());
+    }
+
+    /// `start_on_plan` without a calibration could not act: refused, naming the field.
+    #[test]
+    fn a_start_on_the_plan_without_a_calibration_is_refused() {
+        let config = SpeedConfig {
+            start_on_plan: true,
+            ..SpeedConfig::default()
+        };
+        let e = config.validate("t.toml").expect_err("refused").to_string();
+        assert!(
+            e.contains("speed.start_on_plan") && e.contains("walked_mps"),
+            "{e}"
+        );
+        let config = SpeedConfig {
+            walked_mps: vec![0.16, 0.2],
+            ..config
+        };
+        assert!(config.validate("t.toml").is_ok());
     }
 
     /// A lean gain without a limit, a limit past 0.5 rad, or a fade that does not rise is

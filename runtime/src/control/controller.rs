@@ -387,7 +387,13 @@ impl Controller {
         self.last_foot = None;
         self.phase_hat = None;
         self.steps = 0;
-        self.regulator.restart();
+        match &self.library {
+            Some(library) => {
+                let sigma = self.regulator.status.library_mps;
+                self.regulator.restart_on(sigma, library);
+            }
+            None => self.regulator.restart(),
+        }
         self.step_lever.rest();
         // As after an impact: a stall of this first step may relaunch.
         self.stall.restart(t_s, f64::NAN);

@@ -1,5 +1,38 @@
 //! The step-to-step speed regulator, the step lever and the belt-position loop: one update per
 //! impact (the law: the parent module's docs).
+//!
+//! # The start on the plan (`speed.start_on_plan`, measured 2026-12-06, off as shipped)
+//! A walk begun in a library gait's own state (the simulator's constant-belt, belt-step and
+//! push runs) walks that gait's *plan* at first and creeps to its calibrated speed c(σ) only
+//! over tens of steps; with the calibration from the first impact the regulator asks at once
+//! for the gait that walks the belt after the creep (σ = c⁻¹(belt): 0.185 at 0.20 m/s), too
+//! slow a gait for the first steps, and the robot falls back 0.07–0.22 m. With the option the
+//! integral starts at c(σ₀) − σ₀ for the gait σ₀ the walk began on, so the first steps ask
+//! for σ₀ itself, and the integral (k_i per step, as always) takes the creep up only as the
+//! steps' error shows it. A walk from Stand is unchanged (its launch is not on a plan).
+//!
+//! `adam bench treadmill --config C --seeds …`, max |position| after 10 s at 0.15 / 0.20 /
+//! 0.25 / 0.30 / 0.35 m/s (C: the treadmill config with the step lean and the step length
+//! after the impact, the options its comment names):
+//! - seeds 1–5: 0.089 / 0.193 / 0.097 / 0.085 / 0.046 m without, 0.451 (seed 5 tripped a knee
+//!   limit after a stall relaunch at 6 s) / 0.086 / 0.087 / 0.071 / 0.067 m with it; seeds
+//!   6–10: 0.298 (one trip) / 0.102 / 0.088 / 0.056 / 0.043 m without, 0.343 / 0.125 / 0.102 /
+//!   0.083 / 0.080 m with it;
+//! - the belt step (seeds 1–10): with it no fall (without: seed 6 falls) and |position|
+//!   0.068–0.324 m, but down matches in 18 steps (seed 2) and never (seed 9);
+//! - with the option alone (no lean) the belts wander more, 0.334 (one fall) / 0.213 / 0.300 /
+//!   0.131 / 0.114 m (seeds 1–5): the start is not the only slow transient, the lean damps the
+//!   others.
+//! - On the 0.15 m/s belt every seed's second step takes 1.12–1.21 s from the 0.15 m/s gait's
+//!   planned state, with or without the option (whose integral there is 0.003 m/s): the slow
+//!   gait's own start, which one seed in ten does not survive with the lean, with the option
+//!   or without it (seeds 11–30: 20 of 20 walk 60 s both ways; the shipped treadmill config
+//!   walks seeds 1–30).
+//!
+//! Tried with it and not kept (seeds 1–10): the slow lean down to 0.12 m/s
+//! (`step_lean_from_mps`): 5 of 10 trip at 0.15 m/s; σ limited to 0.01 m/s a step: 0.447 m at
+//! 0.25 m/s; the step lever at 0.2 or 0.3 s: trips at every belt below 0.30 m/s; the
+//! disturbance settle from 0.07 m/s: the belt step falls (seed 9).
 
 use super::super::tick::{OperatorCommand, SpeedStatus};
 use crate::config::SpeedConfig;
@@ -196,6 +229,18 @@ impl SpeedRegulator {
     /// integral, no belt travel.
     pub(in crate::control) fn restart(&mut self) {
         self.forget(false);
+    }
+
+    /// [`SpeedRegulator::restart`] on the library gait of speed `sigma_mps` under a walked-speed
+    /// calibration: with `speed.start_on_plan` the integral starts at `map.walked_at(σ) − σ`
+    /// (within `speed.integral_limit_mps`), so that the first steps keep the gait the walk
+    /// started on (module docs, "The start on the plan").
+    pub(in crate::control) fn restart_on(&mut self, sigma_mps: f64, map: &impl SpeedMap) {
+        self.forget(false);
+        if self.config.start_on_plan && sigma_mps.is_finite() {
+            let limit = self.config.integral_limit_mps;
+            self.status.integral_mps = (map.walked_at(sigma_mps) - sigma_mps).clamp(-limit, limit);
+        }
     }
 
     /// Forgets the steps as a Walk from Stand begins: no integral (resting

@@ -194,6 +194,64 @@ fn with_a_calibration_the_regulator_asks_for_the_gait_that_walks_the_command() {
     assert!((r.status.commanded_mps - 0.42).abs() < 1e-12);
 }
 
+#[test]
+fn a_walk_started_on_its_plan_keeps_its_gait_until_the_steps_show_the_creep() {
+    let config = SpeedConfig {
+        start_on_plan: true,
+        ..SpeedConfig::default()
+    };
+    // Begun in the 0.25 m/s gait's own state on a 0.25 m/s belt: the integral starts at what
+    // the calibration says that gait walks over its plan, 1.2 · 0.25 − 0.25 = 0.05 m/s ...
+    let mut r = regulator(&config);
+    r.restart_on(0.25, &Fast);
+    assert!((r.status.integral_mps - 0.05).abs() < 1e-12);
+    // ... so a first step at the plan's speed, at the centre, keeps the gait it started on
+    // (without the option: the gait that walks 0.25 m/s after the creep, 0.25 / 1.2).
+    r.belt_travel_m = 0.2;
+    let sigma = r.on_impact_mapped(0.2, 0.8, (0.15, 0.35), &Fast);
+    assert!((sigma - 0.25).abs() < 1e-12, "σ = {sigma}");
+    // The steps then walk faster than the command (the creep shows): the integral takes it
+    // up by k_i times the stride's error each step, and σ comes down with it.
+    let mut integral = r.status.integral_mps;
+    let mut previous_m = 0.2;
+    for _ in 0..5 {
+        r.status.position_m = 0.0;
+        r.belt_travel_m = 0.2;
+        let (before, command) = (r.status.library_mps, r.status.commanded_mps);
+        r.on_impact_mapped(0.22, 0.8, (0.15, 0.35), &Fast);
+        // The error of the stride (this step and the one before) against its command.
+        let error = command - (previous_m + 0.22) / 1.6;
+        previous_m = 0.22;
+        assert!(error < 0.0);
+        assert!((r.status.integral_mps - (integral + config.integral_gain * error)).abs() < 1e-12);
+        assert!(r.status.library_mps < before);
+        integral = r.status.integral_mps;
+    }
+    // Off, or with no calibration, the walk starts with no integral.
+    for (start_on_plan, restart_on) in [(false, true), (true, false)] {
+        let config = SpeedConfig {
+            start_on_plan,
+            ..SpeedConfig::default()
+        };
+        let mut r = regulator(&config);
+        if restart_on {
+            r.restart_on(0.25, &Fast);
+        } else {
+            r.restart_on(0.25, &Uncalibrated);
+        }
+        assert_eq!(r.status.integral_mps, 0.0);
+    }
+    // The integral's limit holds: 0.4 m/s walks 0.48, 0.08 over, limited to 0.05.
+    let config = SpeedConfig {
+        start_on_plan: true,
+        integral_limit_mps: 0.05,
+        ..SpeedConfig::default()
+    };
+    let mut r = regulator(&config);
+    r.restart_on(0.4, &Fast);
+    assert_eq!(r.status.integral_mps, 0.05);
+}
+
 /// The treadmill config's start and restart settings.
 fn start_config() -> SpeedConfig {
     SpeedConfig {
