@@ -61,6 +61,12 @@ pub struct GaitConfig {
     /// its derivatives are exact constants.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub speed_mps: Option<[f64; 2]>,
+    /// The zero dynamics' Poincaré eigenvalue, at most: λ_z = (σ⁺/σ⁻)², σ the angular momentum
+    /// about the stance foot just after and just before the impact (σ⁺ is the momentum about
+    /// the swing foot before it, which the impact conserves). λ_z is how much of a speed error
+    /// a step keeps; absent, free (ours, not Table I: the paper's gaits have no such bound).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_zero_dynamics_eigenvalue: Option<f64>,
     /// Swing-foot height at mid-step, at least, m.
     pub swing_clearance_m: f64,
     /// Downward swing-foot velocity at impact, at least, m/s.
@@ -445,6 +451,7 @@ impl Default for PlannerConfig {
                 step_length_m: [0.15, 0.35],
                 step_duration_s: [0.6, 0.9],
                 speed_mps: None,
+                max_zero_dynamics_eigenvalue: None,
                 swing_clearance_m: 0.03,
                 impact_velocity_mps: 0.01,
                 liftoff_velocity_mps: 0.0,
@@ -561,6 +568,15 @@ impl PlannerConfig {
         positive("gait.step_duration_s[0]", g.step_duration_s[0])?;
         range("gait.pitch_limits_rad", g.pitch_limits_rad)?;
         g.check_speed(origin)?;
+        if let Some(l) = g.max_zero_dynamics_eigenvalue {
+            if !(l.is_finite() && l > 0.0 && l < 1.0) {
+                return Err(bad(
+                    "gait.max_zero_dynamics_eigenvalue",
+                    l.to_string(),
+                    "must be in (0, 1): a stable gait's eigenvalue is below 1",
+                ));
+            }
+        }
         nonneg("gait.swing_clearance_m", g.swing_clearance_m)?;
         nonneg("gait.impact_velocity_mps", g.impact_velocity_mps)?;
         nonneg("gait.liftoff_velocity_mps", g.liftoff_velocity_mps)?;

@@ -27,6 +27,10 @@ pub(super) enum Kind {
     /// hi·T − d ≥ 0 (one row d − v·T = 0 when lo = hi). Linear in T and d: its Jacobian is
     /// constant and its Hessian zero. Only when the config asks for a speed.
     Speed,
+    /// The zero dynamics' contraction at the impact: λ·σ⁻² − σ_sw⁻² ≥ 0 at the last point (σ⁻
+    /// about the stance foot, σ_sw⁻ about the swing foot, which the impact conserves as σ⁺).
+    /// Only when the config bounds `gait.max_zero_dynamics_eigenvalue`.
+    Contraction,
     /// τ at the first and last point (equalities, not fixed bounds: fixed variables make an
     /// interior point's barrier ill-conditioned).
     TauEnds,
@@ -47,6 +51,9 @@ impl Kind {
             Kind::Impact => "impact, periodicity, impulse and lift-off".into(),
             Kind::TauEnds => "phase at the step ends".into(),
             Kind::Speed => "step speed (gait.speed_mps)".into(),
+            Kind::Contraction => {
+                "zero-dynamics contraction (gait.max_zero_dynamics_eigenvalue)".into()
+            }
         }
     }
 }

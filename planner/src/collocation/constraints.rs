@@ -158,6 +158,10 @@ impl HzdProblem {
         lo.extend([0.0, 0.0, 0.0, liftoff]);
         hi.extend([inf, inf, inf, inf]);
         self.add(Kind::Impact, vars, &lo, &hi);
+        if g.max_zero_dynamics_eigenvalue.is_some() {
+            let vars = self.point_vars(last, false);
+            self.add(Kind::Contraction, vars, &[0.0], &[inf]);
+        }
         // Speed: linear rows in T and d (a quotient d/T would make the Hessian non-zero and
         // the rows' scale depend on T).
         match g.speed_mps {
@@ -290,6 +294,9 @@ pub enum ConstraintGroup {
     PitchRate,
     /// The step's mean speed `gait.speed_mps`: rows d − v·T, m.
     Speed,
+    /// The zero dynamics' contraction `gait.max_zero_dynamics_eigenvalue`: λ·σ⁻² − σ⁺²,
+    /// (kg·m²/s)².
+    Contraction,
     /// Bounds that only keep the search finite: Bézier coefficients within the joint limits,
     /// θ± within ±1 rad, power slacks below the largest motor power.
     SearchBox,
@@ -297,7 +304,7 @@ pub enum ConstraintGroup {
 
 impl ConstraintGroup {
     /// Every group, in report order.
-    pub const ALL: [ConstraintGroup; 17] = [
+    pub const ALL: [ConstraintGroup; 18] = [
         Self::StepLength,
         Self::StepDuration,
         Self::ThighLength,
@@ -314,6 +321,7 @@ impl ConstraintGroup {
         Self::Pitch,
         Self::PitchRate,
         Self::Speed,
+        Self::Contraction,
         Self::SearchBox,
     ];
 
@@ -336,6 +344,7 @@ impl ConstraintGroup {
             Self::Pitch => "torso pitch (rad)",
             Self::PitchRate => "torso pitch rate (rad/s)",
             Self::Speed => "step speed rows d − v·T (m)",
+            Self::Contraction => "zero-dynamics contraction λ·σ⁻² − σ⁺² ((kg·m²/s)²)",
             Self::SearchBox => "search box: α, θ±, power slacks",
         }
     }
@@ -360,6 +369,7 @@ impl ConstraintGroup {
             | Self::Liftoff
             | Self::Pitch
             | Self::PitchRate
+            | Self::Contraction
             | Self::SearchBox => "ours",
         }
     }
@@ -410,6 +420,7 @@ impl HzdProblem {
                     .collect(),
                 Kind::SwingHeight => vec![Some(G::SwingClearance)],
                 Kind::Speed => vec![Some(G::Speed); b.n_out],
+                Kind::Contraction => vec![Some(G::Contraction)],
                 Kind::SwingEnd => vec![None, Some(G::ImpactVelocity)],
                 Kind::Impact => (0..b.n_out)
                     .map(|r| match r.checked_sub(2 * nq) {

@@ -47,7 +47,12 @@ impl HzdProblem {
     pub(super) fn uses_model(kind: Kind) -> bool {
         matches!(
             kind,
-            Kind::Dynamics | Kind::PhaseLift | Kind::SwingHeight | Kind::SwingEnd | Kind::Impact
+            Kind::Dynamics
+                | Kind::PhaseLift
+                | Kind::SwingHeight
+                | Kind::SwingEnd
+                | Kind::Impact
+                | Kind::Contraction
         )
     }
 
@@ -247,6 +252,29 @@ impl HzdProblem {
                     .map_err(|_| DomainError)?;
                 let v = bp.model.frame_velocity_in(st, bp.legs.side(bp.stance).foot);
                 out[2 * nq + 3] = v[1];
+            }
+            Kind::Contraction => {
+                let (qn, dqn) = (&z[..nq], &z[nq..2 * nq]);
+                let zero = [S::zero(); MAX_DOF];
+                let [q, dq, _] = bp
+                    .full_state_design(qn, dqn, &zero[..nq], design)
+                    .map_err(|_| DomainError)?;
+                self.inertias_of(kind, z, inertias);
+                bp.model
+                    .body_states_into(&q, &dq, st)
+                    .map_err(|_| DomainError)?;
+                let at = |side| bp.model.frame_position_in(st, bp.legs.side(side).foot);
+                let (p_st, p_sw) = (at(bp.stance), at(bp.swing()));
+                let (mut h_st, mut h_sw) = (S::zero(), S::zero());
+                for (b, i) in inertias[..bp.model.bodies.len()].iter().enumerate() {
+                    let c = bp.model.point_position(st, b, i.com_xz_m);
+                    let v = bp.model.point_velocity(st, b, i.com_xz_m);
+                    let spin = i.inertia_yy_kgm2 * st.omega[b];
+                    h_st += i.mass_kg * ((c[1] - p_st[1]) * v[0] - (c[0] - p_st[0]) * v[1]) + spin;
+                    h_sw += i.mass_kg * ((c[1] - p_sw[1]) * v[0] - (c[0] - p_sw[0]) * v[1]) + spin;
+                }
+                let lambda = S::from(g.max_zero_dynamics_eigenvalue.unwrap_or(1.0));
+                out[0] = lambda * h_st * h_st - h_sw * h_sw;
             }
         }
         Ok(())

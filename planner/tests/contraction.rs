@@ -1,0 +1,135 @@
+//! The zero dynamics' contraction bound `gait.max_zero_dynamics_eigenvalue`: λ·σ⁻² − σ⁺² ≥ 0 at
+//! the impact, σ the angular momentum about the stance foot (σ⁺, after the impact about the new
+//! stance foot, is the momentum about the swing foot just before it, which a plastic impact of
+//! that foot conserves).
+
+use planner::biped::PlanarBiped;
+use planner::collocation::{ConstraintGroup, HzdProblem};
+use planner::config::PlannerConfig;
+use planner::guess::initial_guess;
+use planner::nlp::check::check_derivatives;
+use planner::nlp::NlpProblem;
+use planner::plan::plan_gait;
+use planner::verify::{verify_gait, VerifyOptions};
+
+const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
+fn load(urdf: &str, config: &str) -> (model::PlanarModel, String, PlannerConfig) {
+    let urdf = format!("{ROOT}/{urdf}");
+    let text = std::fs::read_to_string(&urdf).expect("URDF");
+    let model = model::PlanarModel::from_urdf_str(&text, &urdf).expect("model");
+    let config = PlannerConfig::load(format!("{ROOT}/{config}")).expect("config");
+    (model, text, config)
+}
+
+/// The row is in the problem only when asked for, one inequality row ≥ 0 in the contraction
+/// group, and its derivatives (hyper-dual, through the kinematics and the body inertias)
+/// match central finite differences.
+#[test]
+fn the_contraction_row_exists_only_when_asked_for_and_its_derivatives_are_exact() {
+    let (model, _, config) = load(
+        "configs/robots/adam_planar.urdf",
+        "configs/planner/adam.toml",
+    );
+    assert_eq!(config.gait.max_zero_dynamics_eigenvalue, None);
+    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
+    let free = HzdProblem::new(bp.clone(), config.clone(), Vec::new(), false).expect("problem");
+    let x = initial_guess(&bp, &free.layout, 0.22, 0.8).expect("guess");
+    let mut bounded = config.clone();
+    bounded.gait.max_zero_dynamics_eigenvalue = Some(0.8);
+    let p = HzdProblem::new(bp.clone(), bounded.clone(), x.clone(), false).expect("problem");
+    let plain = HzdProblem::new(bp.clone(), config.clone(), x.clone(), false).expect("problem");
+    assert_eq!(p.num_constraints(), plain.num_constraints() + 1);
+    let groups = p.constraint_groups();
+    let rows: Vec<usize> = (0..p.num_constraints())
+        .filter(|&i| groups.rows[i] == Some(ConstraintGroup::Contraction))
+        .collect();
+    assert_eq!(rows.len(), 1);
+    let (lo, hi) = p.constraint_bounds_vec();
+    assert_eq!((lo[rows[0]], hi[rows[0]]), (0.0, f64::INFINITY));
+    let lambda: Vec<f64> = (0..p.num_constraints())
+        .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
+        .collect();
+    let r = check_derivatives(&p, &x, 0.7, &lambda).expect("evaluates");
+    // As the whole problem's check (plan_adam.rs): rounding is near 1e-9 relative, a wrong
+    // or missing derivative 1e-3 or above.
+    assert!(r.max_jacobian_error < 1e-6, "{r:?}");
+    assert!(r.max_hessian_error < 1e-5, "{r:?}");
+    assert_eq!(r.jacobian_entries_outside_pattern, 0);
+    assert_eq!(r.hessian_entries_outside_pattern, 0);
+    // The row is λ·σ⁻² − σ⁺²: linear in the bound, and the same momenta at any bound.
+    let row_at = |l: f64| {
+        let mut c = config.clone();
+        c.gait.max_zero_dynamics_eigenvalue = Some(l);
+        let p = HzdProblem::new(bp.clone(), c, x.clone(), false).expect("problem");
+        let mut g = vec![0.0; p.num_constraints()];
+        p.constraints(&x, &mut g).expect("evaluates");
+        let groups = p.constraint_groups();
+        let i = (0..g.len())
+            .find(|&i| groups.rows[i] == Some(ConstraintGroup::Contraction))
+            .expect("the row");
+        g[i]
+    };
+    let (r1, r2, r3) = (row_at(0.2), row_at(0.5), row_at(0.8));
+    let sigma_minus_sq = (r3 - r1) / 0.6;
+    assert!(sigma_minus_sq > 0.0, "{sigma_minus_sq}");
+    assert!((r2 - (r1 + 0.3 * sigma_minus_sq)).abs() < 1e-9 * sigma_minus_sq.max(1.0));
+}
+
+/// A bounded gait verifies with its dominant Poincaré eigenvalue at the bound: the full
+/// closed-loop map's (finite differences of simulated steps, `planner::verify`) is the zero
+/// dynamics' (σ⁺/σ⁻)² the row bounds, so an active bound sets it. Measured 2026-12-06 (the
+/// co-designed ADAM at 0.20 m/s, the library config): 0.896 without the bound, 0.7999 with
+/// λ ≤ 0.8; the whole library with λ ≤ 0.75: 0.7499–0.7500 at every speed.
+#[test]
+fn a_gait_planned_with_the_bound_verifies_with_its_eigenvalue_at_the_bound() {
+    let (model, text, mut config) = load(
+        "configs/robots/adam_codesign.urdf",
+        "configs/planner/adam_library.toml",
+    );
+    config.gait.speed_mps = Some([0.2, 0.2]);
+    config.gait.max_zero_dynamics_eigenvalue = Some(0.8);
+    let planned = plan_gait(&model, "robot.urdf", &text, &config, &mut |_| {}).expect("plans");
+    for s in &planned.stages {
+        assert!(s.violation < 1e-6, "{s:?}");
+    }
+    let g = &planned.gait;
+    let report = verify_gait(&model, g, VerifyOptions::default()).expect("verifies");
+    println!(
+        "{:.4} m in {:.4} s, CoT {:.5}: {report}",
+        g.step_length_m, g.step_duration_s, g.cost_of_transport
+    );
+    // The verification's eigenvalues are finite differences of simulated steps (relative
+    // error about 1e-4 in the shipped library's); the bound is active (0.896 without it).
+    assert!(
+        (report.spectral_radius - 0.8).abs() < 2e-3,
+        "{}",
+        report.spectral_radius
+    );
+}
+
+/// A bound outside (0, 1) is refused, naming the field and the value.
+#[test]
+fn a_bound_outside_zero_to_one_is_refused_naming_the_field() {
+    let text =
+        std::fs::read_to_string(format!("{ROOT}/configs/planner/adam.toml")).expect("config");
+    let anchor = "step_duration_s = [0.6, 0.9]";
+    assert!(text.contains(anchor));
+    let with = |l: &str| {
+        text.replace(
+            anchor,
+            &format!("{anchor}\nmax_zero_dynamics_eigenvalue = {l}"),
+        )
+    };
+    let ok = PlannerConfig::from_toml(&with("0.8"), "x.toml").expect("0.8");
+    assert_eq!(ok.gait.max_zero_dynamics_eigenvalue, Some(0.8));
+    for l in ["0.0", "1.0", "1.5", "-0.2", "nan"] {
+        let e = PlannerConfig::from_toml(&with(l), "x.toml")
+            .expect_err(l)
+            .to_string();
+        assert!(
+            e.contains("x.toml") && e.contains("gait.max_zero_dynamics_eigenvalue"),
+            "{e}"
+        );
+    }
+}
