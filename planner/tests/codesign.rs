@@ -5,10 +5,8 @@ mod common;
 
 use model::design::{generate_model, DesignLengths};
 use planner::biped::PlanarBiped;
-use planner::collocation::{Codesign, HzdProblem};
+use planner::collocation::HzdProblem;
 use planner::config::PlannerConfig;
-use planner::guess::initial_guess;
-use planner::nlp::check::check_derivatives;
 use planner::nlp::NlpProblem;
 
 const CONFIG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/planner/adam.toml");
@@ -85,31 +83,7 @@ fn assert_at_the_sweep_optimum([thigh_m, shin_m]: [f64; 2]) {
 }
 
 fn problem(exact: bool, with_cost: bool) -> (HzdProblem, Vec<f64>) {
-    let config = uniform_mesh_config();
-    let (model, _) = generate_model(&DesignLengths::ADAM).expect("model");
-    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
-    let spec = Codesign {
-        nominal_m: [0.24, 0.25],
-        bounds_m: [[0.15, 0.35], [0.15, 0.35]],
-        exact_inertia: exact,
-        mass: model::design::MassModel::default(),
-    };
-    let probe = HzdProblem::with_codesign(
-        bp.clone(),
-        config.clone(),
-        Vec::new(),
-        with_cost,
-        Some(spec.clone()),
-    )
-    .expect("problem");
-    let l = &probe.layout;
-    let mut x = initial_guess(&bp, l, 0.25, 0.75).expect("guess");
-    // Lengths away from the nominal ones, so the design joints are not at zero.
-    x.truncate(l.design_var(0));
-    x.extend([0.27, 0.21]);
-    let p =
-        HzdProblem::with_codesign(bp, config, x.clone(), with_cost, Some(spec)).expect("problem");
-    (p, x)
+    common::codesign_problem(uniform_mesh_config(), exact, with_cost)
 }
 
 /// Largest |g_a(x) − g_b(x)| over the constraints of two problems of the same layout.
@@ -129,17 +103,8 @@ fn codesign_derivatives_match_finite_differences() {
     for exact in [false, true] {
         for with_cost in [false, true] {
             let (p, x) = problem(exact, with_cost);
-            let m = p.num_constraints();
-            let lambda: Vec<f64> = (0..m)
-                .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
-                .collect();
-            let r = check_derivatives(&p, &x, 0.7, &lambda).expect("evaluates");
+            let r = common::assert_exact_derivatives(&p, &x);
             println!("exact {exact} with_cost {with_cost}: {r:?}");
-            assert!(r.max_gradient_error < 1e-6, "{r:?}");
-            assert!(r.max_jacobian_error < 1e-6, "{r:?}");
-            assert!(r.max_hessian_error < 1e-5, "{r:?}");
-            assert_eq!(r.jacobian_entries_outside_pattern, 0);
-            assert_eq!(r.hessian_entries_outside_pattern, 0);
         }
     }
 }

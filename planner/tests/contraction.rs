@@ -3,12 +3,12 @@
 //! stance foot, is the momentum about the swing foot just before it, which a plastic impact of
 //! that foot conserves).
 
-use model::design::{generate_model, DesignLengths};
+mod common;
+
 use planner::biped::PlanarBiped;
-use planner::collocation::{Codesign, ConstraintGroup, HzdProblem};
+use planner::collocation::{ConstraintGroup, HzdProblem};
 use planner::config::PlannerConfig;
 use planner::guess::initial_guess;
-use planner::nlp::check::check_derivatives;
 use planner::nlp::NlpProblem;
 use planner::plan::plan_gait;
 use planner::verify::{verify_gait, VerifyOptions};
@@ -48,16 +48,7 @@ fn the_contraction_row_exists_only_when_asked_for_and_its_derivatives_are_exact(
     assert_eq!(rows.len(), 1);
     let (lo, hi) = p.constraint_bounds_vec();
     assert_eq!((lo[rows[0]], hi[rows[0]]), (0.0, f64::INFINITY));
-    let lambda: Vec<f64> = (0..p.num_constraints())
-        .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
-        .collect();
-    let r = check_derivatives(&p, &x, 0.7, &lambda).expect("evaluates");
-    // As the whole problem's check (plan_adam.rs): rounding is near 1e-9 relative, a wrong
-    // or missing derivative 1e-3 or above.
-    assert!(r.max_jacobian_error < 1e-6, "{r:?}");
-    assert!(r.max_hessian_error < 1e-5, "{r:?}");
-    assert_eq!(r.jacobian_entries_outside_pattern, 0);
-    assert_eq!(r.hessian_entries_outside_pattern, 0);
+    common::assert_exact_derivatives(&p, &x);
     // The row is λ·σ⁻² − σ⁺²: linear in the bound, and the same momenta at any bound.
     let row_at = |l: f64| {
         let mut c = config.clone();
@@ -84,29 +75,8 @@ fn with_the_lengths_as_variables_the_row_s_derivatives_are_exact() {
     let mut config =
         PlannerConfig::load(format!("{ROOT}/configs/planner/adam.toml")).expect("config");
     config.gait.max_zero_dynamics_eigenvalue = Some(0.8);
-    let (model, _) = generate_model(&DesignLengths::ADAM).expect("model");
-    let bp = PlanarBiped::new(model, config.gait.stance_leg, &[]).expect("biped");
-    let spec = Codesign {
-        nominal_m: [0.24, 0.25],
-        bounds_m: [[0.15, 0.35], [0.15, 0.35]],
-        exact_inertia: true,
-        mass: model::design::MassModel::default(),
-    };
-    let probe = HzdProblem::with_codesign(
-        bp.clone(),
-        config.clone(),
-        Vec::new(),
-        false,
-        Some(spec.clone()),
-    )
-    .expect("problem");
-    let l = &probe.layout;
-    let mut x = initial_guess(&bp, l, 0.25, 0.75).expect("guess");
-    // Lengths away from the nominal ones, so the design joints are not at zero.
-    x.truncate(l.design_var(0));
-    x.extend([0.27, 0.21]);
-    let design = [l.design_var(0), l.design_var(1)];
-    let p = HzdProblem::with_codesign(bp, config, x.clone(), false, Some(spec)).expect("problem");
+    let (p, x) = common::codesign_problem(config, true, false);
+    let design = [p.layout.design_var(0), p.layout.design_var(1)];
     let groups = p.constraint_groups();
     let row = (0..p.num_constraints())
         .find(|&i| groups.rows[i] == Some(ConstraintGroup::Contraction))
@@ -121,14 +91,7 @@ fn with_the_lengths_as_variables_the_row_s_derivatives_are_exact() {
             "no entry of the row in design variable {d}"
         );
     }
-    let lambda: Vec<f64> = (0..p.num_constraints())
-        .map(|i| ((i * 7919) % 13) as f64 / 13.0 - 0.5)
-        .collect();
-    let r = check_derivatives(&p, &x, 0.7, &lambda).expect("evaluates");
-    assert!(r.max_jacobian_error < 1e-6, "{r:?}");
-    assert!(r.max_hessian_error < 1e-5, "{r:?}");
-    assert_eq!(r.jacobian_entries_outside_pattern, 0);
-    assert_eq!(r.hessian_entries_outside_pattern, 0);
+    common::assert_exact_derivatives(&p, &x);
 }
 
 /// A bounded gait verifies with its dominant Poincaré eigenvalue at the bound: the full
