@@ -4,7 +4,8 @@
 //! the shipped treadmill config misses at 0.20–0.35 m/s (0.170 / 0.262 / 0.123 / 0.111 m,
 //! seeds 1–5, `tests/treadmill.rs`). They stay off there because the belt step down then
 //! matches in more than 8 steps in a seed of five (18 steps, seed 2) and the 0.15 m/s belt
-//! trips in one (seed 5) (README, "Treadmill speeds").
+//! trips in one (seed 5) (README, "Treadmill speeds"). The config with them is
+//! `configs/runtime/adam_treadmill_options.toml` (`extends` the treadmill config).
 
 use runtime::sim::run::walk;
 use runtime::sim::scenarios::{
@@ -39,23 +40,20 @@ fn odometry_drift_m(rows: &[SpeedRow], from_s: f64) -> f64 {
     mean(&error[error.len() - 4..]) - mean(&error[..4])
 }
 
-/// The treadmill config with the step lean (the gains its comments name), each step's length
-/// measured again at the tick after the impact, and the start on the plan.
+/// `configs/runtime/adam_treadmill_options.toml`: the treadmill config with the step lean, each
+/// step's length measured again at the tick after the impact, and the start on the plan.
 fn with_the_options() -> Setup {
     let root = env!("CARGO_MANIFEST_DIR");
-    let mut setup = Setup::load(
-        format!("{root}/configs/runtime/adam_treadmill.toml"),
+    let setup = Setup::load(
+        format!("{root}/configs/runtime/adam_treadmill_options.toml"),
         format!("{root}/{}", runtime::DEFAULT_GAIT),
     )
-    .expect("the treadmill config, its gait library and the shipped gait load");
-    let s = &mut setup.config.speed;
-    s.step_lean_gain_rad_per_mps = 0.2;
-    s.slow_step_lean_gain_rad_per_mps = 0.1;
-    s.max_step_lean_rad = 0.006;
-    s.step_lean_from_mps = 0.16;
-    s.step_lean_full_mps = 0.22;
-    s.step_length_after_impact = true;
-    s.start_on_plan = true;
+    .expect("the options config, its base, the gait library and the shipped gait load");
+    let s = &setup.config.speed;
+    assert!(
+        s.step_lean_gain_rad_per_mps > 0.0 && s.step_length_after_impact && s.start_on_plan,
+        "the three options are on: {s:?}"
+    );
     setup
 }
 

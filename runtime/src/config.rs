@@ -11,12 +11,14 @@
 
 mod bringup;
 pub mod calibration;
+mod extends;
 mod imu;
 mod orbit;
 mod speed;
 
 pub use bringup::BringupConfig;
 pub use calibration::{CalibrationConfig, JointCalibration};
+pub use extends::MAX_EXTENDS_DEPTH;
 pub use imu::{ImuConfig, VN100_BAUD_RATES_BPS};
 pub use orbit::OrbitConfig;
 pub use speed::{PositionSource, SpeedConfig};
@@ -414,14 +416,20 @@ pub const LEG_JOINT_NAMES: [&str; LEG_SLOTS] = [
 ];
 
 impl RuntimeConfig {
-    /// Reads and validates a runtime config; errors name the file and the field.
+    /// Reads and validates a runtime config; errors name the file and the field. A config may
+    /// be written as the changes to another: `extends = "base.toml"` (config::extends: tables
+    /// merge key by key, other values replace the base's; errors name the file and its chain).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|error| RuntimeError::Io {
-            path: path.to_path_buf(),
-            error,
+        let (merged, chain) = extends::read_merged(path)?;
+        let mut origin = path.display().to_string();
+        if !chain.is_empty() {
+            origin = format!("{origin} (extends {})", chain.join(" → "));
+        }
+        let text = toml::to_string(&merged).map_err(|e| RuntimeError::Parse {
+            origin: origin.clone(),
+            message: e.to_string(),
         })?;
-        let origin = path.display().to_string();
         let config = Self::from_toml(&text, &origin)?;
         for ignored in config.ignored_settings() {
             eprintln!("warning: {origin}: {ignored}");
@@ -451,6 +459,16 @@ impl RuntimeConfig {
             origin: origin.to_string(),
             message: e.to_string(),
         })?;
+        if let Some(v) = raw.get("extends") {
+            return Err(RuntimeError::InvalidField {
+                origin: origin.to_string(),
+                field: "extends".into(),
+                value: v.to_string(),
+                reason: "only a config read from its file can extend another \
+                         (RuntimeConfig::load: the base is found next to it)"
+                    .into(),
+            });
+        }
         let version = raw.get("schema_version").and_then(|v| v.as_integer());
         if version != Some(i64::from(RUNTIME_CONFIG_VERSION)) {
             return Err(RuntimeError::InvalidField {

@@ -1,0 +1,204 @@
+//! `extends = "base.toml"`: a runtime config written as the changes to another. The file is
+//! read as TOML; with a top-level `extends` (a file name, relative to this file's folder) its
+//! base is read the same way (a chain of at most [`MAX_EXTENDS_DEPTH`] files) and this file's
+//! values are laid over it: tables merge key by key, every other value (a number, a string, an
+//! array, an array of tables such as `leg_motors`) replaces the base's whole. Paths inside the
+//! merged config (`speed.library`) stay relative to the file that is loaded, not to its base.
+
+use crate::{Result, RuntimeError};
+use std::path::Path;
+
+/// How many files one chain of `extends` may hold (a cycle ends here too).
+pub const MAX_EXTENDS_DEPTH: usize = 8;
+
+/// The TOML of `path` laid over its `extends` chain, and the chain's file names after the
+/// first (for the origin of errors).
+pub(super) fn read_merged(path: &Path) -> Result<(toml::Value, Vec<String>)> {
+    let mut chain = Vec::new();
+    let value = read_chain(path, &mut chain)?;
+    Ok((value, chain))
+}
+
+fn read_chain(path: &Path, chain: &mut Vec<String>) -> Result<toml::Value> {
+    let text = std::fs::read_to_string(path).map_err(|error| RuntimeError::Io {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    let origin = path.display().to_string();
+    let mut value: toml::Value = toml::from_str(&text).map_err(|e| RuntimeError::Parse {
+        origin: origin.clone(),
+        message: e.to_string(),
+    })?;
+    let Some(extends) = value.as_table_mut().and_then(|t| t.remove("extends")) else {
+        return Ok(value);
+    };
+    let bad = |value: String, reason: String| RuntimeError::InvalidField {
+        origin: origin.clone(),
+        field: "extends".into(),
+        value,
+        reason,
+    };
+    let Some(name) = extends.as_str() else {
+        return Err(bad(
+            extends.to_string(),
+            "must be a file name (a string), relative to this file's folder".into(),
+        ));
+    };
+    if chain.len() + 1 >= MAX_EXTENDS_DEPTH {
+        return Err(bad(
+            format!("\"{name}\""),
+            format!("more than {MAX_EXTENDS_DEPTH} configs chained (a cycle?): {chain:?}"),
+        ));
+    }
+    let base_path = path.parent().unwrap_or(Path::new(".")).join(name);
+    if !base_path.is_file() {
+        return Err(bad(
+            format!("\"{name}\""),
+            format!("{} is not a readable file", base_path.display()),
+        ));
+    }
+    chain.push(name.to_string());
+    let mut base = read_chain(&base_path, chain)?;
+    lay_over(&mut base, value);
+    Ok(base)
+}
+
+/// Lays `over` onto `base`: tables key by key, anything else replaced.
+fn lay_over(base: &mut toml::Value, over: toml::Value) {
+    match (base, over) {
+        (toml::Value::Table(b), toml::Value::Table(o)) => {
+            for (key, value) in o {
+                match b.get_mut(&key) {
+                    Some(slot) if slot.is_table() && value.is_table() => lay_over(slot, value),
+                    _ => {
+                        b.insert(key, value);
+                    }
+                }
+            }
+        }
+        (b, o) => *b = o,
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use super::*;
+    use crate::config::RuntimeConfig;
+    use std::path::PathBuf;
+
+    const CONFIGS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/runtime");
+
+    /// A fresh folder for this test's files.
+    fn folder(tag: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("adam-extends-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// The shipped options config is the treadmill config with its three options on, nothing
+    /// else changed.
+    #[test]
+    fn the_options_config_is_the_treadmill_config_with_three_speed_settings() {
+        let base = RuntimeConfig::load(format!("{CONFIGS}/adam_treadmill.toml")).unwrap();
+        let options =
+            RuntimeConfig::load(format!("{CONFIGS}/adam_treadmill_options.toml")).unwrap();
+        assert!(!base.speed.start_on_plan && base.speed.max_step_lean_rad == 0.0);
+        let mut want = base.clone();
+        let s = &mut want.speed;
+        s.step_lean_gain_rad_per_mps = 0.2;
+        s.slow_step_lean_gain_rad_per_mps = 0.1;
+        s.max_step_lean_rad = 0.006;
+        s.step_lean_from_mps = 0.16;
+        s.step_lean_full_mps = 0.22;
+        s.step_length_after_impact = true;
+        s.start_on_plan = true;
+        assert_eq!(options, want);
+    }
+
+    /// A missing base, a base that is not a string, a chain that loops, a bad value laid over a
+    /// good base, and `extends` in text with no file to find the base from: each refused,
+    /// naming the file, `extends` or the field, and the value.
+    #[test]
+    fn a_bad_extends_is_refused_naming_the_file_the_field_and_the_value() {
+        let dir = folder("bad");
+        let write = |name: &str, text: &str| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            path
+        };
+        let shipped = std::fs::read_to_string(format!("{CONFIGS}/adam.toml")).unwrap();
+        write("base.toml", &shipped);
+        let cases = [
+            (
+                "missing.toml",
+                "extends = \"nowhere.toml\"\n",
+                &[
+                    "missing.toml",
+                    "extends",
+                    "nowhere.toml",
+                    "not a readable file",
+                ][..],
+            ),
+            (
+                "number.toml",
+                "extends = 3\n",
+                &["number.toml", "extends", "3", "a string"][..],
+            ),
+            (
+                "a.toml",
+                "extends = \"b.toml\"\n",
+                &["extends", "cycle"][..],
+            ),
+            (
+                "over.toml",
+                "extends = \"base.toml\"\n[gains]\nkp_nm_per_rad = [150.0, -1.0, 150.0, 150.0]\n",
+                &[
+                    "over.toml (extends base.toml)",
+                    "gains.kp_nm_per_rad[1]",
+                    "-1",
+                ][..],
+            ),
+            (
+                "typo.toml",
+                "extends = \"base.toml\"\n[speed]\nstart_on_plans = true\n",
+                &["typo.toml (extends base.toml)", "start_on_plans"][..],
+            ),
+        ];
+        write("b.toml", "extends = \"a.toml\"\n");
+        for (name, text, words) in cases {
+            let path = write(name, text);
+            let e = RuntimeConfig::load(&path).unwrap_err().to_string();
+            for w in words {
+                assert!(e.contains(w), "{name}: {w}: {e}");
+            }
+        }
+        // A good overlay: one gain changed, the rest the base's.
+        let path = write(
+            "good.toml",
+            "extends = \"base.toml\"\n[gains]\nkp_nm_per_rad = [100.0, 100.0, 100.0, 100.0]\n",
+        );
+        let good = RuntimeConfig::load(&path).unwrap();
+        let mut want = RuntimeConfig::from_toml(&shipped, "adam.toml").unwrap();
+        want.gains.kp_nm_per_rad = [100.0; 4];
+        assert_eq!(good, want);
+        // From text alone there is no folder to find a base in.
+        let e = RuntimeConfig::from_toml("extends = \"base.toml\"\n", "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("t.toml") && e.contains("extends"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn tables_merge_key_by_key_and_other_values_replace_the_base_s() {
+        let mut base: toml::Value =
+            toml::from_str("a = 1\nlist = [1, 2]\n[t]\nx = 1\ny = 2\n[t.u]\nz = 3\n").unwrap();
+        let over: toml::Value = toml::from_str("list = [9]\n[t]\ny = 5\n[t.u]\nw = 4\n").unwrap();
+        lay_over(&mut base, over);
+        let want: toml::Value =
+            toml::from_str("a = 1\nlist = [9]\n[t]\nx = 1\ny = 5\n[t.u]\nz = 3\nw = 4\n").unwrap();
+        assert_eq!(base, want);
+    }
+}
