@@ -73,6 +73,22 @@ fn calibrate_writes_a_new_config_with_the_offsets_and_the_flip_and_never_in_plac
         "--force",
     ]);
     assert!(!ok && stderr.contains("never writes in place"), "{stderr}");
+    // A config that extends another: refused, naming both (its copy could not find its base).
+    let (ok, _, stderr) = adam(&[
+        "calibrate",
+        "--backend",
+        "sim",
+        "--config",
+        "configs/runtime/adam_treadmill_options.toml",
+        "--out",
+        dir.join("options.toml").to_str().expect("path"),
+    ]);
+    assert!(
+        !ok && stderr.contains("adam_treadmill_options.toml extends")
+            && stderr.contains("adam_treadmill.toml"),
+        "{stderr}"
+    );
+    assert!(!dir.join("options.toml").exists());
 
     // That calibration does not fit the simulated robot of `adam run` (its motors sit as the
     // model's joints): the pre-flight refuses before any gain, naming the joints.

@@ -605,8 +605,15 @@ fn every_input_that_changes_a_result_is_hashed_and_a_changed_one_refused() {
     );
     std::fs::create_dir_all(dir.join("runtime")).expect("mkdir");
     std::fs::write(dir.join("runtime/adam.toml"), runtime).expect("w");
+    // And one that extends it (`extends`): its base is an input too.
+    std::fs::write(
+        dir.join("runtime/over.toml"),
+        "extends = \"adam.toml\"\n[gains]\nkd_nm_s_per_rad = [3.0, 3.0, 3.0, 3.0]\n",
+    )
+    .expect("w");
 
-    // The treadmill plan hashes the config, the gait, its robot, the library and its robot.
+    // The treadmill plan hashes the config and its base, the gait, its robot, the library and its
+    // robot.
     let tread = dir.join("treadmill.toml");
     let (ok, _, err) = sweep_plan(
         "treadmill",
@@ -617,13 +624,14 @@ fn every_input_that_changes_a_result_is_hashed_and_a_changed_one_refused() {
             "--seeds",
             "1",
             "--runtime-config",
-            &s(&dir.join("runtime/adam.toml")),
+            &s(&dir.join("runtime/over.toml")),
         ],
     );
     assert!(ok, "{err}");
     let text = std::fs::read_to_string(&tread).expect("plan");
     for role in [
         "runtime config",
+        "runtime config base",
         "gait",
         "robot",
         "gait library",
@@ -662,6 +670,7 @@ fn every_input_that_changes_a_result_is_hashed_and_a_changed_one_refused() {
     // hashes; restored, the plan holds again.
     for (plan, file, roles) in [
         (&tread, "gaits/adam_library.json", &["gait library"][..]),
+        (&tread, "runtime/adam.toml", &["runtime config base"][..]),
         (&tread, "robots/adam_codesign.urdf", &["library robot"][..]),
         (&lib, "robots/adam_codesign.urdf", &["robot"][..]),
         (&lib, "planner/adam_library.toml", &["planner config"][..]),

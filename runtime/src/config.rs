@@ -18,7 +18,7 @@ mod speed;
 
 pub use bringup::BringupConfig;
 pub use calibration::{CalibrationConfig, JointCalibration};
-pub use extends::MAX_EXTENDS_DEPTH;
+pub use extends::{extends_chain, MAX_EXTENDS_DEPTH};
 pub use imu::{ImuConfig, VN100_BAUD_RATES_BPS};
 pub use orbit::OrbitConfig;
 pub use speed::{PositionSource, SpeedConfig};

@@ -126,6 +126,17 @@ pub(crate) fn calibrate(args: CalibrateArgs) -> Result<()> {
     ])?;
     let (config, gait) = target.inputs();
     check_out(&config, &out, force)?;
+    // The new config is the input's text with its [calibration] replaced: a config that extends
+    // another has no whole text to write (its copy would look for its base next to --out).
+    if let Some(base) = runtime::config::extends_chain(&config)?.first() {
+        bail!(
+            "{} extends {}: adam calibrate writes a copy of one whole config with its \
+             [calibration] replaced; calibrate {} (a config that extends none)",
+            config.display(),
+            base.display(),
+            base.display()
+        );
+    }
     let text = std::fs::read_to_string(&config)
         .with_context(|| format!("reading {}", config.display()))?;
     let setup = runtime::Setup::load(&config, &gait)?;

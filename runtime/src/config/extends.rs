@@ -4,6 +4,9 @@
 //! values are laid over it: tables merge key by key, every other value (a number, a string, an
 //! array, an array of tables such as `leg_motors`) replaces the base's whole. Paths inside the
 //! merged config (`speed.library`) stay relative to the file that is loaded, not to its base.
+//! What copies or hashes a config takes its chain along ([`extends_chain`]): a treadmill sweep
+//! hashes every file of it; `adam calibrate`, which writes a copy of one whole config's text,
+//! refuses a config that extends another, naming its base.
 
 use crate::{Result, RuntimeError};
 use std::path::Path;
@@ -63,6 +66,37 @@ fn read_chain(path: &Path, chain: &mut Vec<String>) -> Result<toml::Value> {
     Ok(base)
 }
 
+/// The files `path` extends, nearest first (empty: it extends none): what a copy or a content
+/// hash of the config must carry along with it.
+pub fn extends_chain(path: &Path) -> Result<Vec<std::path::PathBuf>> {
+    let mut chain = Vec::new();
+    let mut current = path.to_path_buf();
+    loop {
+        let origin = current.display().to_string();
+        let text = std::fs::read_to_string(&current).map_err(|error| RuntimeError::Io {
+            path: current.clone(),
+            error,
+        })?;
+        let value: toml::Value = toml::from_str(&text).map_err(|e| RuntimeError::Parse {
+            origin: origin.clone(),
+            message: e.to_string(),
+        })?;
+        let Some(name) = value.get("extends").and_then(|e| e.as_str()) else {
+            return Ok(chain);
+        };
+        if chain.len() + 1 >= MAX_EXTENDS_DEPTH {
+            return Err(RuntimeError::InvalidField {
+                origin,
+                field: "extends".into(),
+                value: format!("\"{name}\""),
+                reason: format!("more than {MAX_EXTENDS_DEPTH} configs chained (a cycle?)"),
+            });
+        }
+        current = current.parent().unwrap_or(Path::new(".")).join(name);
+        chain.push(current.clone());
+    }
+}
+
 /// Lays `over` onto `base`: tables key by key, anything else replaced.
 fn lay_over(base: &mut toml::Value, over: toml::Value) {
     match (base, over) {
@@ -115,6 +149,13 @@ mod tests {
         s.step_length_after_impact = true;
         s.start_on_plan = true;
         assert_eq!(options, want);
+        let chain = extends_chain(Path::new(&format!("{CONFIGS}/adam_treadmill_options.toml")));
+        assert_eq!(
+            chain.unwrap(),
+            [Path::new(CONFIGS).join("adam_treadmill.toml")]
+        );
+        let none = extends_chain(Path::new(&format!("{CONFIGS}/adam_treadmill.toml")));
+        assert!(none.unwrap().is_empty());
     }
 
     /// A missing base, a base that is not a string, a chain that loops, a bad value laid over a

@@ -2,8 +2,8 @@
 //! steps, pushes at points of the step, start and restart, × seeds), a task per run. The task
 //! function is `runtime::sim::matrix::run` and the report the bench's tables, the same the
 //! bench prints (without its push bisection, a search and not a matrix). Its inputs, by
-//! content hash: the runtime config, the gait and its robot, and the gait library the config
-//! names for speed control (with the library's robot, if another file).
+//! content hash: the runtime config (and the configs it extends), the gait and its robot, and the
+//! gait library the config names for speed control (with the library's robot, if another file).
 
 use super::plan::{Input, SweepPlan, Task, TreadmillSettings};
 use super::result::{Payload, TaskResult};
@@ -14,6 +14,7 @@ use std::path::Path;
 
 /// The roles of the treadmill study's inputs.
 const RUNTIME_CONFIG: &str = "runtime config";
+const RUNTIME_CONFIG_BASE: &str = "runtime config base";
 const GAIT: &str = "gait";
 const ROBOT: &str = "robot";
 const GAIT_LIBRARY: &str = "gait library";
@@ -39,6 +40,10 @@ pub(crate) fn plan(
         Input::hashed(GAIT, gait)?,
         Input::hashed(ROBOT, &urdf)?,
     ];
+    // The configs it extends: a change there is a change of the config.
+    for base in runtime::config::extends_chain(config)? {
+        inputs.push(Input::hashed(RUNTIME_CONFIG_BASE, &base)?);
+    }
     // The gait library the config names (speed control) and its robot, if another file.
     if let Some(rel) = runtime::config::RuntimeConfig::load(config)?.speed.library {
         let library = config.parent().unwrap_or_else(|| Path::new(".")).join(rel);
