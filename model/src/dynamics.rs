@@ -468,13 +468,25 @@ impl PlanarModel {
         self.body_states_into(q, dq, &mut st)?;
         let mut l = S::zero();
         for (b, body) in self.bodies.iter().enumerate() {
-            let i = lift::<S>(&body.inertia);
-            let c = self.point_position(&st, b, i.com_xz_m);
-            let v = self.point_velocity(&st, b, i.com_xz_m);
-            let r = [c[0] - p[0], c[1] - p[1]];
-            l += i.mass_kg * (r[1] * v[0] - r[0] * v[1]) + i.inertia_yy_kgm2 * st.omega[b];
+            l += self.body_angular_momentum_in(&st, b, &lift::<S>(&body.inertia), p);
         }
         Ok(l)
+    }
+
+    /// Angular momentum of body `b` with mass properties `i` about the world point `p` (about
+    /// +y), kg·m²/s, from body states with q̇ (the caller's inertias: a design's, or the
+    /// model's; [`Self::angular_momentum_about`] sums it over the model's bodies).
+    pub fn body_angular_momentum_in<S: Real>(
+        &self,
+        st: &BodyStates<S>,
+        b: usize,
+        i: &BodyInertia<S>,
+        p: [S; 2],
+    ) -> S {
+        let c = self.point_position(st, b, i.com_xz_m);
+        let v = self.point_velocity(st, b, i.com_xz_m);
+        let r = [c[0] - p[0], c[1] - p[1]];
+        i.mass_kg * (r[1] * v[0] - r[0] * v[1]) + i.inertia_yy_kgm2 * st.omega[b]
     }
 
     /// Maps actuator torques (one per actuated joint, N·m) to generalized forces B u.

@@ -424,7 +424,16 @@ impl RuntimeConfig {
         let (merged, chain) = extends::read_merged(path)?;
         let mut origin = path.display().to_string();
         if !chain.is_empty() {
-            origin = format!("{origin} (extends {})", chain.join(" → "));
+            let names: Vec<String> = chain
+                .iter()
+                .map(|p| {
+                    p.file_name()
+                        .unwrap_or(p.as_os_str())
+                        .to_string_lossy()
+                        .into_owned()
+                })
+                .collect();
+            origin = format!("{origin} (extends {})", names.join(" → "));
         }
         let text = toml::to_string(&merged).map_err(|e| RuntimeError::Parse {
             origin: origin.clone(),

@@ -267,11 +267,8 @@ impl HzdProblem {
                 let (p_st, p_sw) = (at(bp.stance), at(bp.swing()));
                 let (mut h_st, mut h_sw) = (S::zero(), S::zero());
                 for (b, i) in inertias[..bp.model.bodies.len()].iter().enumerate() {
-                    let c = bp.model.point_position(st, b, i.com_xz_m);
-                    let v = bp.model.point_velocity(st, b, i.com_xz_m);
-                    let spin = i.inertia_yy_kgm2 * st.omega[b];
-                    h_st += i.mass_kg * ((c[1] - p_st[1]) * v[0] - (c[0] - p_st[0]) * v[1]) + spin;
-                    h_sw += i.mass_kg * ((c[1] - p_sw[1]) * v[0] - (c[0] - p_sw[0]) * v[1]) + spin;
+                    h_st += bp.model.body_angular_momentum_in(st, b, i, p_st);
+                    h_sw += bp.model.body_angular_momentum_in(st, b, i, p_sw);
                 }
                 let lambda = S::from(g.max_zero_dynamics_eigenvalue.unwrap_or(1.0));
                 out[0] = lambda * h_st * h_st - h_sw * h_sw;

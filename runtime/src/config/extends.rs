@@ -9,20 +9,27 @@
 //! refuses a config that extends another, naming its base.
 
 use crate::{Result, RuntimeError};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// How many files one chain of `extends` may hold (a cycle ends here too).
 pub const MAX_EXTENDS_DEPTH: usize = 8;
 
-/// The TOML of `path` laid over its `extends` chain, and the chain's file names after the
-/// first (for the origin of errors).
-pub(super) fn read_merged(path: &Path) -> Result<(toml::Value, Vec<String>)> {
+/// The TOML of `path` laid over its `extends` chain, and the chain's files after the first,
+/// nearest first.
+pub(super) fn read_merged(path: &Path) -> Result<(toml::Value, Vec<PathBuf>)> {
     let mut chain = Vec::new();
     let value = read_chain(path, &mut chain)?;
     Ok((value, chain))
 }
 
-fn read_chain(path: &Path, chain: &mut Vec<String>) -> Result<toml::Value> {
+/// The files `path` extends, nearest first (empty: it extends none), each checked as
+/// [`RuntimeConfig::load`](super::RuntimeConfig::load) checks it: what a copy or a content hash
+/// of the config must carry along with it.
+pub fn extends_chain(path: &Path) -> Result<Vec<PathBuf>> {
+    Ok(read_merged(path)?.1)
+}
+
+fn read_chain(path: &Path, chain: &mut Vec<PathBuf>) -> Result<toml::Value> {
     let text = std::fs::read_to_string(path).map_err(|error| RuntimeError::Io {
         path: path.to_path_buf(),
         error,
@@ -60,41 +67,10 @@ fn read_chain(path: &Path, chain: &mut Vec<String>) -> Result<toml::Value> {
             format!("{} is not a readable file", base_path.display()),
         ));
     }
-    chain.push(name.to_string());
+    chain.push(base_path.clone());
     let mut base = read_chain(&base_path, chain)?;
     lay_over(&mut base, value);
     Ok(base)
-}
-
-/// The files `path` extends, nearest first (empty: it extends none): what a copy or a content
-/// hash of the config must carry along with it.
-pub fn extends_chain(path: &Path) -> Result<Vec<std::path::PathBuf>> {
-    let mut chain = Vec::new();
-    let mut current = path.to_path_buf();
-    loop {
-        let origin = current.display().to_string();
-        let text = std::fs::read_to_string(&current).map_err(|error| RuntimeError::Io {
-            path: current.clone(),
-            error,
-        })?;
-        let value: toml::Value = toml::from_str(&text).map_err(|e| RuntimeError::Parse {
-            origin: origin.clone(),
-            message: e.to_string(),
-        })?;
-        let Some(name) = value.get("extends").and_then(|e| e.as_str()) else {
-            return Ok(chain);
-        };
-        if chain.len() + 1 >= MAX_EXTENDS_DEPTH {
-            return Err(RuntimeError::InvalidField {
-                origin,
-                field: "extends".into(),
-                value: format!("\"{name}\""),
-                reason: format!("more than {MAX_EXTENDS_DEPTH} configs chained (a cycle?)"),
-            });
-        }
-        current = current.parent().unwrap_or(Path::new(".")).join(name);
-        chain.push(current.clone());
-    }
 }
 
 /// Lays `over` onto `base`: tables key by key, anything else replaced.
@@ -119,7 +95,6 @@ fn lay_over(base: &mut toml::Value, over: toml::Value) {
 mod tests {
     use super::*;
     use crate::config::RuntimeConfig;
-    use std::path::PathBuf;
 
     const CONFIGS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../configs/runtime");
 
