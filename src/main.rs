@@ -140,8 +140,14 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Soak(args) => run::soak(args),
         Command::Plan(args) => plan::plan(&args),
         Command::Gait {
-            command: GaitCommand::Check { gait, epsilon },
-        } => plan::gait_check(&gait, epsilon),
+            command:
+                GaitCommand::Check {
+                    gait,
+                    epsilon,
+                    runtime,
+                    latency_s,
+                },
+        } => plan::gait_check(&gait, epsilon, runtime.as_deref(), latency_s),
         Command::Logs {
             command: LogsCommand::Info { log },
         } => logs::info(&log),

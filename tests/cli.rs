@@ -603,3 +603,85 @@ fn plan_library_writes_a_library_of_the_speeds_asked_for() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `adam gait check --runtime CONFIG` walks the gait under that config's joint PD with late
+/// references: with the references on time (the latency equal to the config's lead) the PD
+/// walks the plan; with the simulated bus's latency it walks faster (the creep of
+/// `late_references_speed_the_gait_up`); a negative latency is refused by name.
+#[test]
+fn gait_check_walks_the_gait_under_the_runtime_s_pd() {
+    // The binary runs in the workspace's folder (`adam`).
+    let gait = "configs/gaits/adam_codesign.json".to_string();
+    let config = "configs/runtime/adam.toml".to_string();
+    let speed_percent = |out: &str| -> f64 {
+        let line = out
+            .lines()
+            .find(|l| l.contains("% of the plan's"))
+            .unwrap_or_else(|| panic!("no walked speed in {out}"));
+        let before = line.split(" % of the plan's").next().expect("a figure");
+        before
+            .rsplit('(')
+            .next()
+            .expect("a percentage")
+            .trim()
+            .parse()
+            .expect("a number")
+    };
+    let (ok, out, err) = adam(&[
+        "gait",
+        "check",
+        &gait,
+        "--runtime",
+        &config,
+        "--latency-s",
+        "0.0005",
+    ]);
+    assert!(ok, "{err}\n{out}");
+    assert!(out.contains("references 0.0 ms late"), "{out}");
+    let on_time = speed_percent(&out);
+    assert!((on_time - 100.0).abs() < 1.0, "{out}");
+    let (ok, out, err) = adam(&["gait", "check", &gait, "--runtime", &config]);
+    assert!(ok, "{err}\n{out}");
+    assert!(out.contains("references 2.5 ms late"), "{out}");
+    let late = speed_percent(&out);
+    assert!(late > 120.0, "{out}");
+    let (ok, _, err) = adam(&[
+        "gait",
+        "check",
+        &gait,
+        "--runtime",
+        &config,
+        "--latency-s=-0.001",
+    ]);
+    assert!(
+        !ok && err.contains("--latency-s") && err.contains("-0.001"),
+        "{err}"
+    );
+    // A latency without a config to walk under is an error, not ignored.
+    let (ok, _, err) = adam(&["gait", "check", &gait, "--latency-s", "0.002"]);
+    assert!(!ok && err.contains("--runtime"), "{err}");
+    // One gain per joint differing: refused, naming the field.
+    let text = std::fs::read_to_string(&config).expect("config");
+    let anchor = "kp_nm_per_rad = [150.0, 150.0, 150.0, 150.0]";
+    assert!(text.contains(anchor), "{config}");
+    let dir = std::env::temp_dir().join(format!("adam-gait-check-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let uneven = dir.join("uneven.toml");
+    std::fs::write(
+        &uneven,
+        text.replace(anchor, "kp_nm_per_rad = [150.0, 120.0, 150.0, 120.0]"),
+    )
+    .expect("write");
+    let (ok, _, err) = adam(&[
+        "gait",
+        "check",
+        &gait,
+        "--runtime",
+        uneven.to_str().expect("utf-8"),
+    ]);
+    assert!(
+        !ok && err.contains("gains.kp_nm_per_rad") && err.contains("uneven.toml"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -466,11 +466,16 @@ impl PlanarModel {
     pub fn angular_momentum_about<S: Real>(&self, q: &[S], dq: &[S], p: [S; 2]) -> Result<S> {
         let mut st = BodyStates::zeroed();
         self.body_states_into(q, dq, &mut st)?;
+        Ok(self.angular_momentum_in(&st, p))
+    }
+
+    /// [`Self::angular_momentum_about`] from body states already computed with q̇.
+    pub fn angular_momentum_in<S: Real>(&self, st: &BodyStates<S>, p: [S; 2]) -> S {
         let mut l = S::zero();
         for (b, body) in self.bodies.iter().enumerate() {
-            l += self.body_angular_momentum_in(&st, b, &lift::<S>(&body.inertia), p);
+            l += self.body_angular_momentum_in(st, b, &lift::<S>(&body.inertia), p);
         }
-        Ok(l)
+        l
     }
 
     /// Angular momentum of body `b` with mass properties `i` about the world point `p` (about

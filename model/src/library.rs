@@ -44,6 +44,11 @@ pub struct LibraryCheck {
     pub verified_step_length_m: f64,
     /// Step duration of the closed-loop orbit, s.
     pub verified_step_duration_s: f64,
+    /// The orbit's apex margin (`planner::verify::apex_margin`): the fraction of its
+    /// post-impact angular momentum about the stance foot a step may lose and still pass over
+    /// that foot. Absent in libraries planned before it was recorded (2026-12-06).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub apex_margin: Option<f64>,
 }
 
 impl LibraryCheck {
@@ -346,6 +351,7 @@ mod tests {
                 fixed_point_residual: 1e-10,
                 verified_step_length_m: speed * gait.step_duration_s,
                 verified_step_duration_s: gait.step_duration_s,
+                apex_margin: None,
             },
         }
     }

@@ -25,6 +25,7 @@ fn library(speeds: &[f64]) -> GaitLibrary {
                     fixed_point_residual: 3e-9,
                     verified_step_length_m: g.step_length_m * 1.001,
                     verified_step_duration_s: g.step_duration_s * 0.999,
+                    apex_margin: Some(0.08),
                 },
                 gait: g,
             }
@@ -52,6 +53,17 @@ fn a_library_round_trips_through_its_file() {
     assert_eq!(back, lib);
     let text = std::fs::read_to_string(&path).expect("text");
     assert!(text.contains("\"schema_version\": 1") && text.contains("verified_step_duration_s"));
+    assert!(text.contains("\"apex_margin\": 0.08"), "{text}");
+    // A library written before the apex margin was recorded loads, without one.
+    let mut old = lib.clone();
+    for e in &mut old.entries {
+        e.check.apex_margin = None;
+    }
+    let old_path = scratch("round_trip_no_margin.json");
+    old.save(&old_path).expect("saves");
+    let old_text = std::fs::read_to_string(&old_path).expect("text");
+    assert!(!old_text.contains("apex_margin"));
+    assert_eq!(GaitLibrary::load(&old_path).expect("loads"), old);
     // The shipped robot's URDF is the one the library names, relative to the library's folder
     // (the shipped gait names `../robots/…` from configs/gaits/).
     let shipped = Path::new(ROOT).join("configs/gaits/library.json");

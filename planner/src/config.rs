@@ -67,6 +67,13 @@ pub struct GaitConfig {
     /// a step keeps; absent, free (ours, not Table I: the paper's gaits have no such bound).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_zero_dynamics_eigenvalue: Option<f64>,
+    /// The apex margin m, at least: the angular momentum about the stance foot σ stays above
+    /// √(1 − (1 − m)²)·σ⁺ at every collocation point, σ⁺ the post-impact one, so that a step
+    /// that starts with (1 − m)·σ⁺ still passes over the stance foot
+    /// (`planner::verify::apex_margin`; the verified orbit's margin lands on it). Absent, free
+    /// (ours, not Table I).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_apex_margin: Option<f64>,
     /// Swing-foot height at mid-step, at least, m.
     pub swing_clearance_m: f64,
     /// Downward swing-foot velocity at impact, at least, m/s.
@@ -452,6 +459,7 @@ impl Default for PlannerConfig {
                 step_duration_s: [0.6, 0.9],
                 speed_mps: None,
                 max_zero_dynamics_eigenvalue: None,
+                min_apex_margin: None,
                 swing_clearance_m: 0.03,
                 impact_velocity_mps: 0.01,
                 liftoff_velocity_mps: 0.0,
@@ -574,6 +582,15 @@ impl PlannerConfig {
                     "gait.max_zero_dynamics_eigenvalue",
                     l.to_string(),
                     "must be in (0, 1): a stable gait's eigenvalue is below 1",
+                ));
+            }
+        }
+        if let Some(m) = g.min_apex_margin {
+            if !(m.is_finite() && m > 0.0 && m < 1.0) {
+                return Err(bad(
+                    "gait.min_apex_margin",
+                    m.to_string(),
+                    "must be in (0, 1): a fraction of the post-impact momentum",
                 ));
             }
         }

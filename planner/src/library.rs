@@ -658,6 +658,7 @@ fn entry(
         fixed_point_residual: report.fixed_point_residual,
         verified_step_length_m: report.step_length_m,
         verified_step_duration_s: report.step_duration_s,
+        apex_margin: report.apex_margin.is_finite().then_some(report.apex_margin),
     };
     let mut failures = report.failures(options.verify.fixed_point_tolerance);
     for (what, error) in [
@@ -762,6 +763,7 @@ mod tests {
             fixed_point_residual: 1e-9,
             verified_step_length_m: gait.step_length_m,
             verified_step_duration_s: gait.step_duration_s,
+            apex_margin: Some(0.1),
         };
         SpeedOutcome {
             speed_mps,

@@ -28,6 +28,9 @@
 //!   reduced coordinate passes half a turn. The report also gives one closed-loop step from the
 //!   planned state (the planned step as the closed loop walks it) and
 //!   [`VerifyReport::failures`] says what fails, with the figure and its limit.
+//! - Robustness: [`VerifyReport::apex_margin`], the fraction of the orbit's post-impact angular
+//!   momentum about the stance foot a step may lose and still pass over that foot
+//!   ([`apex_margin`], from the momentum along the fixed point's step).
 
 use crate::biped::PlanarBiped;
 use crate::{PlannerError, Result};
@@ -41,10 +44,11 @@ mod report;
 #[cfg(test)]
 mod tests;
 
-use report::{below, joint_distance};
 pub use report::{
-    StepFigures, VerifyReport, CONSISTENCY_TOLERANCE_RAD, PLAN_ACCURACY, STEP_DURATION_TOLERANCE,
+    apex_margin, StepFigures, VerifyReport, CONSISTENCY_TOLERANCE_RAD, PLAN_ACCURACY,
+    STEP_DURATION_TOLERANCE,
 };
+use report::{below, joint_distance};
 
 /// The chord iterations' Jacobian is taken again at the current iterate when a step shrinks
 /// the fixed-point residual by less than this factor.
@@ -137,6 +141,37 @@ pub enum Law {
     },
 }
 
+impl Law {
+    /// The runtime's law for `gait`: joint PD with gains `kp_nm_per_rad`, `kd_nm_s_per_rad` on
+    /// every output, the gait's feed-forward table times `feedforward_scale` (none without a
+    /// table), the references `reference_delay_s` late.
+    pub fn runtime_pd(
+        gait: &GaitFile,
+        kp_nm_per_rad: f64,
+        kd_nm_s_per_rad: f64,
+        feedforward_scale: f64,
+        reference_delay_s: f64,
+    ) -> Self {
+        let feedforward = gait
+            .feedforward
+            .as_ref()
+            .map(|ff| {
+                ff.phase
+                    .iter()
+                    .zip(&ff.torque_nm)
+                    .map(|(&t, row)| (t, row.iter().map(|u| feedforward_scale * u).collect()))
+                    .collect()
+            })
+            .unwrap_or_default();
+        Law::JointPd {
+            kp_nm_per_rad,
+            kd_nm_s_per_rad,
+            feedforward,
+            reference_delay_s,
+        }
+    }
+}
+
 /// The closed-loop hybrid system of one gait.
 pub struct ClosedLoop {
     /// The robot in pinned-stance coordinates.
@@ -161,6 +196,12 @@ pub struct Step {
     pub max_output_error_rad: f64,
     /// Swing-foot height at the located impact, m.
     pub impact_height_m: f64,
+    /// Angular momentum about the stance foot at the step's start (the post-impact state),
+    /// kg·m²/s, signed forward.
+    pub start_momentum_kgm2_s: f64,
+    /// Its smallest value along the step (at the RK4 samples), kg·m²/s: over the top of the
+    /// stance foot.
+    pub min_momentum_kgm2_s: f64,
 }
 
 /// The closed-loop vector field at one state.
@@ -171,6 +212,8 @@ struct Field {
     u: Vec<f64>,
     /// The outputs y, rad.
     y: Vec<f64>,
+    /// The angular momentum about the stance foot, kg·m²/s.
+    momentum: f64,
 }
 
 /// The pinned-stance dynamics at one reduced state ([`ClosedLoop::pinned`]).
@@ -429,7 +472,9 @@ impl ClosedLoop {
         let ddqr = self.reduced_accelerations(&p, &u);
         let mut f = dqr.to_vec();
         f.extend(ddqr.iter());
-        Ok(Field { f, u, y })
+        // The stance foot is pinned at the origin in these body states.
+        let momentum = self.biped.model.angular_momentum_in(&p.st, [0.0, 0.0]);
+        Ok(Field { f, u, y, momentum })
     }
 
     fn rk4(&self, x: &[f64], h: f64) -> Result<Vec<f64>> {
@@ -516,9 +561,13 @@ impl ClosedLoop {
         let mut t = 0.0;
         let mut max_y = 0.0_f64;
         let max_time = 5.0;
+        let mut start_momentum = None;
+        let mut min_momentum = f64::INFINITY;
         loop {
-            // The outputs at x come with the step's first stage.
+            // The outputs and the momentum at x come with the step's first stage.
             let field = self.field(&x)?;
+            start_momentum.get_or_insert(field.momentum);
+            min_momentum = min_momentum.min(field.momentum);
             max_y = field.y.iter().fold(max_y, |m, v| m.max(v.abs()));
             let next = self.rk4_from(&x, &field.f, dt)?;
             // A walking robot turns no joint (nor its torso) half a turn within a step: past
@@ -548,6 +597,8 @@ impl ClosedLoop {
                     length_m: foot[0],
                     max_output_error_rad: max_y,
                     impact_height_m: foot[1],
+                    start_momentum_kgm2_s: start_momentum.unwrap_or(f64::NAN),
+                    min_momentum_kgm2_s: min_momentum,
                 });
             }
             x = next;
@@ -576,6 +627,76 @@ impl ClosedLoop {
     pub fn poincare(&self, x: &[f64]) -> Result<DVector<f64>> {
         Ok(self.step(x)?.next)
     }
+
+    /// The gait's planned post-impact state (its `initial_state`) in this closed loop's
+    /// reduced coordinates (q_r, q̇_r); `what` says what it is for, in the error of a gait
+    /// without one.
+    pub fn planned_state(&self, gait: &GaitFile, what: &str) -> Result<Vec<f64>> {
+        let state = gait
+            .initial_state
+            .as_ref()
+            .ok_or_else(|| PlannerError::Robot {
+                robot: self.biped.model.name.clone(),
+                reason: format!("the gait file has no initial_state to {what}"),
+            })?;
+        let r = &self.biped.reduced;
+        Ok(r.iter()
+            .map(|&c| state.q[c])
+            .chain(r.iter().map(|&c| state.dq[c]))
+            .collect())
+    }
+
+    /// Walks `steps` steps from the post-impact reduced state `x0` and measures the last
+    /// `measured` of them (Σ length / Σ duration): the speed this closed loop settles at from
+    /// the plan, whether or not that is the plan's orbit (under the runtime's joint PD with late
+    /// references it is not). An error names the step the robot fell or stopped in.
+    pub fn walk(&self, x0: &[f64], steps: usize, measured: usize) -> Result<Walked> {
+        if !(1..=steps).contains(&measured) {
+            return Err(PlannerError::Solver(format!(
+                "walk: {measured} steps measured of {steps} walked (1 to {steps})"
+            )));
+        }
+        let mut x = x0.to_vec();
+        let (mut length_m, mut duration_s) = (0.0, 0.0);
+        for k in 0..steps {
+            let step = self
+                .step(&x)
+                .map_err(|e| PlannerError::Solver(format!("step {} of {steps}: {e}", k + 1)))?;
+            if step.length_m <= 0.0 {
+                return Err(PlannerError::Solver(format!(
+                    "step {} of {steps} lands {:.3} m behind the stance foot: the robot stopped \
+                     short of it and fell back",
+                    k + 1,
+                    -step.length_m
+                )));
+            }
+            if k + measured >= steps {
+                length_m += step.length_m;
+                duration_s += step.duration_s;
+            }
+            x = step.next.as_slice().to_vec();
+        }
+        Ok(Walked {
+            length_m: length_m / measured as f64,
+            duration_s: duration_s / measured as f64,
+        })
+    }
+}
+
+/// The mean step of the last steps of [`ClosedLoop::walk`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Walked {
+    /// Mean step length, m.
+    pub length_m: f64,
+    /// Mean step duration, s.
+    pub duration_s: f64,
+}
+
+impl Walked {
+    /// The walked speed, m/s.
+    pub fn speed_mps(&self) -> f64 {
+        self.length_m / self.duration_s
+    }
 }
 
 /// Largest RK4 step of the simulation a feed-forward table is sampled from, s: the table
@@ -601,20 +722,7 @@ pub fn feedforward_from_orbit(
         ..options
     };
     let cl = ClosedLoop::new(model, gait, fine)?;
-    let state = gait
-        .initial_state
-        .as_ref()
-        .ok_or_else(|| PlannerError::Robot {
-            robot: model.name.clone(),
-            reason: "the gait file has no initial_state to simulate the orbit from".into(),
-        })?;
-    let bp = &cl.biped;
-    let x0: Vec<f64> = bp
-        .reduced
-        .iter()
-        .map(|&c| state.q[c])
-        .chain(bp.reduced.iter().map(|&c| state.dq[c]))
-        .collect();
+    let x0 = cl.planned_state(gait, "simulate the orbit from")?;
     let profile = cl.torque_profile(&x0)?;
     let knots: Vec<f64> = profile.iter().map(|(t, _)| *t).collect();
     let rows: Vec<&[f64]> = profile.iter().map(|(_, u)| u.as_slice()).collect();
@@ -652,19 +760,7 @@ pub fn verify_gait_with(
     let cl = ClosedLoop::new(model, gait, options)?.with_law(law);
     let bp = &cl.biped;
     let nq = bp.nq();
-    let state = gait
-        .initial_state
-        .as_ref()
-        .ok_or_else(|| PlannerError::Robot {
-            robot: model.name.clone(),
-            reason: "the gait file has no initial_state to start the Poincaré map from".into(),
-        })?;
-    let planned: Vec<f64> = bp
-        .reduced
-        .iter()
-        .map(|&c| state.q[c])
-        .chain(bp.reduced.iter().map(|&c| state.dq[c]))
-        .collect();
+    let planned = cl.planned_state(gait, "start the Poincaré map from")?;
     let mut x = DVector::from_vec(planned.clone());
     let from_plan = cl.step(x.as_slice())?;
     let planned_state_residual = (&from_plan.next - &x).amax();
@@ -742,6 +838,7 @@ pub fn verify_gait_with(
         max_output_error_rad: step.max_output_error_rad,
         step_duration_s: step.duration_s,
         step_length_m: step.length_m,
+        apex_margin: apex_margin(step.start_momentum_kgm2_s, step.min_momentum_kgm2_s),
         planned_step: StepFigures {
             duration_s: gait.step_duration_s,
             length_m: gait.step_length_m,

@@ -10,18 +10,8 @@ use planner::collocation::{ConstraintGroup, HzdProblem};
 use planner::config::PlannerConfig;
 use planner::guess::initial_guess;
 use planner::nlp::NlpProblem;
-use planner::plan::plan_gait;
-use planner::verify::{verify_gait, VerifyOptions};
 
-const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
-
-fn load(urdf: &str, config: &str) -> (model::PlanarModel, String, PlannerConfig) {
-    let urdf = format!("{ROOT}/{urdf}");
-    let text = std::fs::read_to_string(&urdf).expect("URDF");
-    let model = model::PlanarModel::from_urdf_str(&text, &urdf).expect("model");
-    let config = PlannerConfig::load(format!("{ROOT}/{config}")).expect("config");
-    (model, text, config)
-}
+use common::{load, ROOT};
 
 /// The row is in the problem only when asked for, one inequality row ≥ 0 in the contraction
 /// group, and its derivatives (hyper-dual, through the kinematics and the body inertias)
@@ -75,23 +65,7 @@ fn with_the_lengths_as_variables_the_row_s_derivatives_are_exact() {
     let mut config =
         PlannerConfig::load(format!("{ROOT}/configs/planner/adam.toml")).expect("config");
     config.gait.max_zero_dynamics_eigenvalue = Some(0.8);
-    let (p, x) = common::codesign_problem(config, true, false);
-    let design = [p.layout.design_var(0), p.layout.design_var(1)];
-    let groups = p.constraint_groups();
-    let row = (0..p.num_constraints())
-        .find(|&i| groups.rows[i] == Some(ConstraintGroup::Contraction))
-        .expect("the row");
-    let jac = p.jacobian_structure();
-    for d in design {
-        assert!(
-            jac.rows
-                .iter()
-                .zip(&jac.cols)
-                .any(|(&r, &c)| r == row && c == d),
-            "no entry of the row in design variable {d}"
-        );
-    }
-    common::assert_exact_derivatives(&p, &x);
+    common::assert_codesign_row_sees_the_lengths(config, ConstraintGroup::Contraction);
 }
 
 /// A bounded gait verifies with its dominant Poincaré eigenvalue at the bound: the full
@@ -101,22 +75,8 @@ fn with_the_lengths_as_variables_the_row_s_derivatives_are_exact() {
 /// λ ≤ 0.8; the whole library with λ ≤ 0.75: 0.7499–0.7500 at every speed.
 #[test]
 fn a_gait_planned_with_the_bound_verifies_with_its_eigenvalue_at_the_bound() {
-    let (model, text, mut config) = load(
-        "configs/robots/adam_codesign.urdf",
-        "configs/planner/adam_library.toml",
-    );
-    config.gait.speed_mps = Some([0.2, 0.2]);
-    config.gait.max_zero_dynamics_eigenvalue = Some(0.8);
-    let planned = plan_gait(&model, "robot.urdf", &text, &config, &mut |_| {}).expect("plans");
-    for s in &planned.stages {
-        assert!(s.violation < 1e-6, "{s:?}");
-    }
-    let g = &planned.gait;
-    let report = verify_gait(&model, g, VerifyOptions::default()).expect("verifies");
-    println!(
-        "{:.4} m in {:.4} s, CoT {:.5}: {report}",
-        g.step_length_m, g.step_duration_s, g.cost_of_transport
-    );
+    let (_, report) =
+        common::plan_and_verify_at_020(|c| c.gait.max_zero_dynamics_eigenvalue = Some(0.8));
     // The verification's eigenvalues are finite differences of simulated steps (relative
     // error about 1e-4 in the shipped library's); the bound is active (0.896 without it).
     assert!(
@@ -129,25 +89,10 @@ fn a_gait_planned_with_the_bound_verifies_with_its_eigenvalue_at_the_bound() {
 /// A bound outside (0, 1) is refused, naming the field and the value.
 #[test]
 fn a_bound_outside_zero_to_one_is_refused_naming_the_field() {
-    let text =
-        std::fs::read_to_string(format!("{ROOT}/configs/planner/adam.toml")).expect("config");
-    let anchor = "step_duration_s = [0.6, 0.9]";
-    assert!(text.contains(anchor));
-    let with = |l: &str| {
-        text.replace(
-            anchor,
-            &format!("{anchor}\nmax_zero_dynamics_eigenvalue = {l}"),
-        )
-    };
-    let ok = PlannerConfig::from_toml(&with("0.8"), "x.toml").expect("0.8");
-    assert_eq!(ok.gait.max_zero_dynamics_eigenvalue, Some(0.8));
-    for l in ["0.0", "1.0", "1.5", "-0.2", "nan"] {
-        let e = PlannerConfig::from_toml(&with(l), "x.toml")
-            .expect_err(l)
-            .to_string();
-        assert!(
-            e.contains("x.toml") && e.contains("gait.max_zero_dynamics_eigenvalue"),
-            "{e}"
-        );
-    }
+    common::assert_gait_field_range(
+        "max_zero_dynamics_eigenvalue",
+        "0.8",
+        |c| assert_eq!(c.gait.max_zero_dynamics_eigenvalue, Some(0.8)),
+        &["0.0", "1.0", "1.5", "-0.2", "nan"],
+    );
 }

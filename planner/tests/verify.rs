@@ -158,38 +158,23 @@ fn a_gait_with_a_changed_robot_or_broken_outputs_is_rejected() {
     );
 }
 
-/// The gait's feed-forward table as the (τ, torques) rows of [`Law::JointPd`].
-fn feedforward_rows(gait: &model::gait::GaitFile) -> Vec<(f64, Vec<f64>)> {
-    let ff = gait
-        .feedforward
-        .as_ref()
-        .expect("the shipped gait has a feed-forward table");
-    ff.phase
-        .iter()
-        .copied()
-        .zip(ff.torque_nm.iter().cloned())
-        .collect()
-}
-
 /// The runtime drives the outputs with joint PD, not the paper's input–output linearization:
 /// with the plan's torques as feed-forward the gait stays a stable periodic orbit under the
 /// runtime's default gains, and without them the robot loses speed every step and stops.
 #[test]
 fn shipped_gait_needs_its_feedforward_under_joint_pd() {
     let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
-    let table = feedforward_rows(&gait);
-    let pd = |feedforward| Law::JointPd {
-        kp_nm_per_rad: 300.0,
-        kd_nm_s_per_rad: 6.0,
-        feedforward,
-        reference_delay_s: 0.0,
-    };
+    assert!(
+        gait.feedforward.is_some(),
+        "the shipped gait has a feed-forward table"
+    );
+    let pd = |scale| Law::runtime_pd(&gait, 300.0, 6.0, scale, 0.0);
     let options = VerifyOptions::default();
-    let report = verify_gait_with(&model, &gait, options, pd(table)).expect("PD closed loop");
+    let report = verify_gait_with(&model, &gait, options, pd(1.0)).expect("PD closed loop");
     println!("joint PD 300/6 + planned feed-forward:\n{report}");
     assert!(report.passed(options.fixed_point_tolerance), "{report}");
     // Without feed-forward there is no periodic orbit near the plan.
-    match verify_gait_with(&model, &gait, options, pd(Vec::new())) {
+    match verify_gait_with(&model, &gait, options, pd(0.0)) {
         Ok(r) => assert!(!r.passed(options.fixed_point_tolerance), "{r}"),
         Err(e) => println!("PD only: {e}"),
     }
@@ -201,32 +186,16 @@ fn shipped_gait_needs_its_feedforward_under_joint_pd() {
 #[test]
 fn late_references_speed_the_gait_up() {
     let (gait, model) = load_gait_and_robot(Path::new(GAIT)).expect("shipped gait loads");
-    let table = feedforward_rows(&gait);
-    let state = gait.initial_state.as_ref().expect("initial state");
     let steady_duration = |delay: f64| -> f64 {
-        let law = Law::JointPd {
-            kp_nm_per_rad: 150.0,
-            kd_nm_s_per_rad: 3.0,
-            feedforward: table.clone(),
-            reference_delay_s: delay,
-        };
+        let law = Law::runtime_pd(&gait, 150.0, 3.0, 1.0, delay);
         let cl = ClosedLoop::new(&model, &gait, VerifyOptions::default())
             .expect("closed loop")
             .with_law(law);
-        let bp = &cl.biped;
-        let mut x: Vec<f64> = bp
-            .reduced
-            .iter()
-            .map(|&c| state.q[c])
-            .chain(bp.reduced.iter().map(|&c| state.dq[c]))
-            .collect();
-        let mut last = f64::NAN;
-        for _ in 0..10 {
-            let step = cl.step(&x).expect("the robot keeps stepping");
-            last = step.duration_s;
-            x = step.next.as_slice().to_vec();
-        }
-        last
+        let x = cl.planned_state(&gait, "walk from").expect("initial state");
+        // The 10th step alone.
+        cl.walk(&x, 10, 1)
+            .expect("the robot keeps stepping")
+            .duration_s
     };
     let (on_time, late) = (steady_duration(0.0), steady_duration(0.001));
     println!("10th step: {on_time:.3} s with on-time references, {late:.3} s with 1 ms late ones");

@@ -421,10 +421,15 @@ impl RuntimeConfig {
     /// merge key by key, other values replace the base's; errors name the file and its chain).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let (merged, chain) = extends::read_merged(path)?;
+        let merged = extends::read_merged(path)?;
         let mut origin = path.display().to_string();
-        if !chain.is_empty() {
-            let names: Vec<String> = chain
+        // A file on its own is read from its text, so that its errors' line numbers are its
+        // own; a merged chain has no one text, and its errors name the key instead.
+        let config = if merged.chain.is_empty() {
+            Self::from_toml(&merged.text, &origin)?
+        } else {
+            let names: Vec<String> = merged
+                .chain
                 .iter()
                 .map(|p| {
                     p.file_name()
@@ -434,12 +439,8 @@ impl RuntimeConfig {
                 })
                 .collect();
             origin = format!("{origin} (extends {})", names.join(" → "));
-        }
-        let text = toml::to_string(&merged).map_err(|e| RuntimeError::Parse {
-            origin: origin.clone(),
-            message: e.to_string(),
-        })?;
-        let config = Self::from_toml(&text, &origin)?;
+            Self::from_value(merged.value, &origin)?
+        };
         for ignored in config.ignored_settings() {
             eprintln!("warning: {origin}: {ignored}");
         }
@@ -468,6 +469,31 @@ impl RuntimeConfig {
             origin: origin.to_string(),
             message: e.to_string(),
         })?;
+        Self::check_header(&raw, origin)?;
+        // From the text, not the value: its errors carry the line and column.
+        let config: Self = toml::from_str(text).map_err(|e| RuntimeError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string(),
+        })?;
+        config.validate(origin)?;
+        Ok(config)
+    }
+
+    /// [`Self::from_toml`] from TOML already parsed (a merged `extends` chain).
+    fn from_value(raw: toml::Value, origin: &str) -> Result<Self> {
+        Self::check_header(&raw, origin)?;
+        let config: Self = raw
+            .try_into()
+            .map_err(|e: toml::de::Error| RuntimeError::Parse {
+                origin: origin.to_string(),
+                message: e.to_string(),
+            })?;
+        config.validate(origin)?;
+        Ok(config)
+    }
+
+    /// No `extends` (only a file's loader finds its base) and this build's schema version.
+    fn check_header(raw: &toml::Value, origin: &str) -> Result<()> {
         if let Some(v) = raw.get("extends") {
             return Err(RuntimeError::InvalidField {
                 origin: origin.to_string(),
@@ -490,12 +516,7 @@ impl RuntimeConfig {
                 reason: format!("this build reads runtime schema version {RUNTIME_CONFIG_VERSION}"),
             });
         }
-        let config: Self = toml::from_str(text).map_err(|e| RuntimeError::Parse {
-            origin: origin.to_string(),
-            message: e.to_string(),
-        })?;
-        config.validate(origin)?;
-        Ok(config)
+        Ok(())
     }
 
     /// The config as TOML text (for the log attachment).

@@ -181,6 +181,7 @@ fn write_library_file(dir: &Path, robot_name: &str) -> PathBuf {
                     fixed_point_residual: 1e-9,
                     verified_step_length_m: length,
                     verified_step_duration_s: duration,
+                    apex_margin: None,
                 },
             }
         })

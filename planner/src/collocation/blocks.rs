@@ -31,6 +31,10 @@ pub(super) enum Kind {
     /// about the stance foot, σ_sw⁻ about the swing foot, which the impact conserves as σ⁺).
     /// Only when the config bounds `gait.max_zero_dynamics_eigenvalue`.
     Contraction,
+    /// The apex margin at one interior point: σ_k² − (1 − (1 − m)²)·σ_0² ≥ 0, σ about the
+    /// stance foot at point k and at the first point (the post-impact momentum). Only when the
+    /// config bounds `gait.min_apex_margin`.
+    ApexMargin,
     /// τ at the first and last point (equalities, not fixed bounds: fixed variables make an
     /// interior point's barrier ill-conditioned).
     TauEnds,
@@ -54,6 +58,7 @@ impl Kind {
             Kind::Contraction => {
                 "zero-dynamics contraction (gait.max_zero_dynamics_eigenvalue)".into()
             }
+            Kind::ApexMargin => "apex margin (gait.min_apex_margin)".into(),
         }
     }
 }

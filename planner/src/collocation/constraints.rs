@@ -162,6 +162,14 @@ impl HzdProblem {
             let vars = self.point_vars(last, false);
             self.add(Kind::Contraction, vars, &[0.0], &[inf]);
         }
+        if g.min_apex_margin.is_some() {
+            // Every interior point against the first (the post-impact momentum).
+            for k in 1..last {
+                let mut vars = self.point_vars(k, false);
+                vars.extend(self.point_vars(0, false));
+                self.add(Kind::ApexMargin, vars, &[0.0], &[inf]);
+            }
+        }
         // Speed: linear rows in T and d (a quotient d/T would make the Hessian non-zero and
         // the rows' scale depend on T).
         match g.speed_mps {
@@ -297,6 +305,9 @@ pub enum ConstraintGroup {
     /// The zero dynamics' contraction `gait.max_zero_dynamics_eigenvalue`: λ·σ⁻² − σ⁺²,
     /// (kg·m²/s)².
     Contraction,
+    /// The apex margin `gait.min_apex_margin`: σ² − (1 − (1 − m)²)·σ⁺² at every interior
+    /// point, (kg·m²/s)².
+    ApexMargin,
     /// Bounds that only keep the search finite: Bézier coefficients within the joint limits,
     /// θ± within ±1 rad, power slacks below the largest motor power.
     SearchBox,
@@ -304,7 +315,7 @@ pub enum ConstraintGroup {
 
 impl ConstraintGroup {
     /// Every group, in report order.
-    pub const ALL: [ConstraintGroup; 18] = [
+    pub const ALL: [ConstraintGroup; 19] = [
         Self::StepLength,
         Self::StepDuration,
         Self::ThighLength,
@@ -322,6 +333,7 @@ impl ConstraintGroup {
         Self::PitchRate,
         Self::Speed,
         Self::Contraction,
+        Self::ApexMargin,
         Self::SearchBox,
     ];
 
@@ -345,6 +357,7 @@ impl ConstraintGroup {
             Self::PitchRate => "torso pitch rate (rad/s)",
             Self::Speed => "step speed rows d − v·T (m)",
             Self::Contraction => "zero-dynamics contraction λ·σ⁻² − σ⁺² ((kg·m²/s)²)",
+            Self::ApexMargin => "apex margin σ² − (1 − (1 − m)²)·σ⁺² ((kg·m²/s)²)",
             Self::SearchBox => "search box: α, θ±, power slacks",
         }
     }
@@ -370,6 +383,7 @@ impl ConstraintGroup {
             | Self::Pitch
             | Self::PitchRate
             | Self::Contraction
+            | Self::ApexMargin
             | Self::SearchBox => "ours",
         }
     }
@@ -421,6 +435,7 @@ impl HzdProblem {
                 Kind::SwingHeight => vec![Some(G::SwingClearance)],
                 Kind::Speed => vec![Some(G::Speed); b.n_out],
                 Kind::Contraction => vec![Some(G::Contraction)],
+                Kind::ApexMargin => vec![Some(G::ApexMargin)],
                 Kind::SwingEnd => vec![None, Some(G::ImpactVelocity)],
                 Kind::Impact => (0..b.n_out)
                     .map(|r| match r.checked_sub(2 * nq) {

@@ -53,6 +53,7 @@ impl HzdProblem {
                 | Kind::SwingEnd
                 | Kind::Impact
                 | Kind::Contraction
+                | Kind::ApexMargin
         )
     }
 
@@ -272,6 +273,28 @@ impl HzdProblem {
                 }
                 let lambda = S::from(g.max_zero_dynamics_eigenvalue.unwrap_or(1.0));
                 out[0] = lambda * h_st * h_st - h_sw * h_sw;
+            }
+            Kind::ApexMargin => {
+                self.inertias_of(kind, z, inertias);
+                let zero = [S::zero(); MAX_DOF];
+                let mut sigma = [S::zero(); 2];
+                for (p, s) in sigma.iter_mut().enumerate() {
+                    let at = 2 * nq * p;
+                    let (qn, dqn) = (&z[at..at + nq], &z[at + nq..at + 2 * nq]);
+                    let [q, dq, _] = bp
+                        .full_state_design(qn, dqn, &zero[..nq], design)
+                        .map_err(|_| DomainError)?;
+                    bp.model
+                        .body_states_into(&q, &dq, st)
+                        .map_err(|_| DomainError)?;
+                    let foot = bp.model.frame_position_in(st, bp.legs.side(bp.stance).foot);
+                    for (b, i) in inertias[..bp.model.bodies.len()].iter().enumerate() {
+                        *s += bp.model.body_angular_momentum_in(st, b, i, foot);
+                    }
+                }
+                let kept = 1.0 - g.min_apex_margin.unwrap_or(0.0);
+                let c = S::from(1.0 - kept * kept);
+                out[0] = sigma[0] * sigma[0] - c * sigma[1] * sigma[1];
             }
         }
         Ok(())

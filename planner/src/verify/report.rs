@@ -40,6 +40,9 @@ pub struct VerifyReport {
     pub step_duration_s: f64,
     /// Simulated step length, m.
     pub step_length_m: f64,
+    /// The apex margin of the orbit ([`apex_margin`]): the fraction of its post-impact angular
+    /// momentum the step can lose and still carry the robot over the stance foot.
+    pub apex_margin: f64,
     /// The step the gait file plans.
     pub planned_step: StepFigures,
     /// One closed-loop step from the planned x⁺: the planned step as the closed loop walks it.
@@ -146,6 +149,23 @@ impl VerifyReport {
     }
 }
 
+/// The apex margin of a step from the angular momentum about the stance foot at its start,
+/// σ⁺, and its smallest value over the top, σ_min (kg·m²/s, same sign): the fraction of σ⁺ an
+/// impact may take away and the robot still pass over the stance foot, 1 − √(1 − (σ_min/σ⁺)²).
+///
+/// Why: on the gait's zero dynamics σ̇ = m·g·x_c and θ̇ = σ/I(θ), so d(σ²)/dθ depends on θ
+/// alone and σ² − σ*²(θ) stays constant along a step. A step that starts with k·σ⁺ reaches
+/// σ² = σ_min² − (1 − k²)·σ⁺² at the top, which is positive only while k > √(1 − (σ_min/σ⁺)²).
+/// NaN if σ⁺ is zero or the two have opposite signs (the orbit stops or runs back).
+pub fn apex_margin(start_momentum: f64, min_momentum: f64) -> f64 {
+    let ratio = min_momentum / start_momentum;
+    if ratio.is_finite() && (0.0..=1.0).contains(&ratio) {
+        1.0 - (1.0 - ratio * ratio).sqrt()
+    } else {
+        f64::NAN
+    }
+}
+
 /// Largest difference of the joint angles (reduced coordinates 1..nq: the torso pitch, 0, is
 /// left out) between two reduced states, rad; NaN if either has a NaN there, so that the checks
 /// made with [`below`] fail on it (`f64::max` would drop the NaN).
@@ -197,6 +217,11 @@ impl fmt::Display for VerifyReport {
             f,
             "simulated step            {:.4} m in {:.4} s",
             self.step_length_m, self.step_duration_s
+        )?;
+        writeln!(
+            f,
+            "apex margin               {:.1} % of the post-impact momentum (lost at an impact, the step stops short of the stance foot)",
+            100.0 * self.apex_margin
         )?;
         writeln!(
             f,

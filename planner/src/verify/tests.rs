@@ -11,14 +11,7 @@ fn closed_loop_and_states() -> (ClosedLoop, Vec<Vec<f64>>) {
     ));
     let (gait, model) = load_gait_and_robot(path).expect("shipped gait");
     let cl = ClosedLoop::new(&model, &gait, VerifyOptions::default()).expect("closed loop");
-    let state = gait.initial_state.as_ref().expect("initial state");
-    let x0: Vec<f64> = cl
-        .biped
-        .reduced
-        .iter()
-        .map(|&c| state.q[c])
-        .chain(cl.biped.reduced.iter().map(|&c| state.dq[c]))
-        .collect();
+    let x0 = cl.planned_state(&gait, "test").expect("initial state");
     // Deterministic perturbations of up to 0.05 rad and 0.3 rad/s, and the states 0.1 s and
     // 0.4 s along the step.
     let mut states = vec![x0.clone()];

@@ -88,3 +88,96 @@ pub fn midrange_slack_start(
     costed.set_initial(x);
     costed
 }
+
+/// The workspace's root folder.
+#[allow(dead_code)] // not every test binary uses every helper
+pub const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+
+/// A robot (URDF path relative to the workspace), its URDF text and a planner config.
+#[allow(dead_code)] // not every test binary uses every helper
+pub fn load(urdf: &str, config: &str) -> (model::PlanarModel, String, PlannerConfig) {
+    let urdf = format!("{ROOT}/{urdf}");
+    let text = std::fs::read_to_string(&urdf).expect("URDF");
+    let model = model::PlanarModel::from_urdf_str(&text, &urdf).expect("model");
+    let config = PlannerConfig::load(format!("{ROOT}/{config}")).expect("config");
+    (model, text, config)
+}
+
+/// `gait.<field> = <value>` added to configs/planner/adam.toml: `ok` loads (and `check` sees
+/// it), and each of `bad` is refused with an error that names the file, the field and the
+/// value.
+#[allow(dead_code)] // not every test binary uses every helper
+pub fn assert_gait_field_range(
+    field: &str,
+    ok: &str,
+    check: impl Fn(&PlannerConfig),
+    bad: &[&str],
+) {
+    let text =
+        std::fs::read_to_string(format!("{ROOT}/configs/planner/adam.toml")).expect("config");
+    let anchor = "step_duration_s = [0.6, 0.9]";
+    assert!(text.contains(anchor));
+    let with = |v: &str| text.replace(anchor, &format!("{anchor}\n{field} = {v}"));
+    check(&PlannerConfig::from_toml(&with(ok), "x.toml").expect(ok));
+    for v in bad {
+        let e = PlannerConfig::from_toml(&with(v), "x.toml")
+            .expect_err(v)
+            .to_string();
+        let value = v.parse::<f64>().expect("a number").to_string();
+        assert!(
+            e.contains("x.toml") && e.contains(&format!("gait.{field}")) && e.contains(&value),
+            "{e}"
+        );
+    }
+}
+
+/// In the co-design problem of `config` (exact inertia coupling) the first row of `group`
+/// has entries in both length variables, and every derivative of the problem is exact.
+#[allow(dead_code)] // not every test binary uses every helper
+pub fn assert_codesign_row_sees_the_lengths(
+    config: PlannerConfig,
+    group: planner::collocation::ConstraintGroup,
+) {
+    let (p, x) = codesign_problem(config, true, false);
+    let groups = p.constraint_groups();
+    let row = (0..p.num_constraints())
+        .find(|&i| groups.rows[i] == Some(group))
+        .expect("a row of the group");
+    let jac = p.jacobian_structure();
+    for d in [p.layout.design_var(0), p.layout.design_var(1)] {
+        assert!(
+            jac.rows
+                .iter()
+                .zip(&jac.cols)
+                .any(|(&r, &c)| r == row && c == d),
+            "no entry of the {group:?} row in design variable {d}"
+        );
+    }
+    assert_exact_derivatives(&p, &x);
+}
+
+/// Plans the co-designed ADAM at 0.20 m/s with the library config changed by `change`, and
+/// verifies the gait (every stage feasible to 1e-6).
+#[allow(dead_code)] // not every test binary uses every helper
+pub fn plan_and_verify_at_020(
+    change: impl Fn(&mut PlannerConfig),
+) -> (model::gait::GaitFile, planner::verify::VerifyReport) {
+    let (model, text, mut config) = load(
+        "configs/robots/adam_codesign.urdf",
+        "configs/planner/adam_library.toml",
+    );
+    config.gait.speed_mps = Some([0.2, 0.2]);
+    change(&mut config);
+    let planned =
+        planner::plan::plan_gait(&model, "robot.urdf", &text, &config, &mut |_| {}).expect("plans");
+    for s in &planned.stages {
+        assert!(s.violation < 1e-6, "{s:?}");
+    }
+    let g = planned.gait;
+    let report = planner::verify::verify_gait(&model, &g, Default::default()).expect("verifies");
+    println!(
+        "{:.4} m in {:.4} s, CoT {:.5}: {report}",
+        g.step_length_m, g.step_duration_s, g.cost_of_transport
+    );
+    (g, report)
+}

@@ -14,28 +14,42 @@ use std::path::{Path, PathBuf};
 /// How many files one chain of `extends` may hold (a cycle ends here too).
 pub const MAX_EXTENDS_DEPTH: usize = 8;
 
-/// The TOML of `path` laid over its `extends` chain, and the chain's files after the first,
-/// nearest first.
-pub(super) fn read_merged(path: &Path) -> Result<(toml::Value, Vec<PathBuf>)> {
+/// A config file as read: its own text, and its TOML laid over its `extends` chain.
+pub(super) struct Merged {
+    /// The file's own text (without a chain, what its errors' line numbers refer to).
+    pub(super) text: String,
+    /// The file's TOML laid over its bases (without `extends`).
+    pub(super) value: toml::Value,
+    /// The chain's files after the first, nearest first (empty: it extends none).
+    pub(super) chain: Vec<PathBuf>,
+}
+
+/// Reads `path` and its `extends` chain.
+pub(super) fn read_merged(path: &Path) -> Result<Merged> {
+    let text = read_text(path)?;
     let mut chain = Vec::new();
-    let value = read_chain(path, &mut chain)?;
-    Ok((value, chain))
+    let value = merge_chain(path, &text, &mut chain)?;
+    Ok(Merged { text, value, chain })
 }
 
 /// The files `path` extends, nearest first (empty: it extends none), each checked as
 /// [`RuntimeConfig::load`](super::RuntimeConfig::load) checks it: what a copy or a content hash
 /// of the config must carry along with it.
 pub fn extends_chain(path: &Path) -> Result<Vec<PathBuf>> {
-    Ok(read_merged(path)?.1)
+    Ok(read_merged(path)?.chain)
 }
 
-fn read_chain(path: &Path, chain: &mut Vec<PathBuf>) -> Result<toml::Value> {
-    let text = std::fs::read_to_string(path).map_err(|error| RuntimeError::Io {
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|error| RuntimeError::Io {
         path: path.to_path_buf(),
         error,
-    })?;
+    })
+}
+
+/// The TOML `text` of `path` laid over the chain it extends (each base pushed onto `chain`).
+fn merge_chain(path: &Path, text: &str, chain: &mut Vec<PathBuf>) -> Result<toml::Value> {
     let origin = path.display().to_string();
-    let mut value: toml::Value = toml::from_str(&text).map_err(|e| RuntimeError::Parse {
+    let mut value: toml::Value = toml::from_str(text).map_err(|e| RuntimeError::Parse {
         origin: origin.clone(),
         message: e.to_string(),
     })?;
@@ -68,7 +82,7 @@ fn read_chain(path: &Path, chain: &mut Vec<PathBuf>) -> Result<toml::Value> {
         ));
     }
     chain.push(base_path.clone());
-    let mut base = read_chain(&base_path, chain)?;
+    let mut base = merge_chain(&base_path, &read_text(&base_path)?, chain)?;
     lay_over(&mut base, value);
     Ok(base)
 }
@@ -181,6 +195,11 @@ mod tests {
                 "extends = \"base.toml\"\n[speed]\nstart_on_plans = true\n",
                 &["typo.toml (extends base.toml)", "start_on_plans"][..],
             ),
+            (
+                "kind.toml",
+                "extends = \"base.toml\"\n[loop]\nrate_hz = \"fast\"\n",
+                &["kind.toml (extends base.toml)", "loop.rate_hz", "\"fast\""][..],
+            ),
         ];
         write("b.toml", "extends = \"a.toml\"\n");
         for (name, text, words) in cases {
@@ -204,6 +223,24 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("t.toml") && e.contains("extends"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A config that extends none is read from its own text: an error's line number is the
+    /// line of the file (not of the TOML written back from its parsed value, as it was).
+    #[test]
+    fn an_error_in_a_file_of_its_own_names_its_own_line() {
+        let dir = folder("line");
+        let shipped = std::fs::read_to_string(format!("{CONFIGS}/adam.toml")).unwrap();
+        let anchor = "rate_hz = 1000.0";
+        let line = 1 + shipped.lines().position(|l| l == anchor).unwrap();
+        let path = dir.join("bad.toml");
+        std::fs::write(&path, shipped.replacen(anchor, "rate_hz = \"fast\"", 1)).unwrap();
+        let e = RuntimeConfig::load(&path).unwrap_err().to_string();
+        assert!(
+            e.contains("bad.toml") && e.contains(&format!("line {line},")) && e.contains("fast"),
+            "line {line}: {e}"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -184,7 +184,7 @@ pub(crate) fn codesign(args: &CodesignArgs) -> Result<()> {
         println!("{}", DesignRow::of_outcome(name, *d, o));
     }
     println!("wrote {} and {}", out_gait.display(), out_urdf.display());
-    gait_check(out_gait, 10.0)
+    gait_check(out_gait, 10.0, None, 0.0)
 }
 
 /// The paper's co-designed thigh and shin lengths, m (its Table II), a reference to compare with.

@@ -166,8 +166,8 @@ impl fmt::Display for LibraryFigures<'_> {
 fn write_table(f: &mut fmt::Formatter<'_>, plan: &LibraryPlan, times: bool) -> fmt::Result {
     write!(
         f,
-        "{:>7} {:>8} {:>7} {:>9} {:>8} {:>9} {:>9} {:>5} {:>5}",
-        "v m/s", "d m", "T s", "CoT", "max|λ|", "T err %", "d err %", "start", "iter"
+        "{:>7} {:>8} {:>7} {:>9} {:>8} {:>8} {:>9} {:>9} {:>5} {:>5}",
+        "v m/s", "d m", "T s", "CoT", "max|λ|", "apex %", "T err %", "d err %", "start", "iter"
     )?;
     if times {
         write!(f, " {:>8}", "solve s")?;
@@ -179,12 +179,15 @@ fn write_table(f: &mut fmt::Formatter<'_>, plan: &LibraryPlan, times: bool) -> f
                 let g = &e.gait;
                 write!(
                     f,
-                    "{:>7.3} {:>8.4} {:>7.4} {:>9.5} {:>8.4} {:>9.3} {:>9.3} {:>5} {:>5}",
+                    "{:>7.3} {:>8.4} {:>7.4} {:>9.5} {:>8.4} {:>8} {:>9.3} {:>9.3} {:>5} {:>5}",
                     o.speed_mps,
                     g.step_length_m,
                     g.step_duration_s,
                     g.cost_of_transport,
                     e.check.spectral_radius,
+                    e.check
+                        .apex_margin
+                        .map_or("—".to_string(), |m| format!("{:.1}", 100.0 * m)),
                     100.0 * e.check.duration_error(g),
                     100.0 * e.check.length_error(g),
                     if o.warm { "warm" } else { "cold" },

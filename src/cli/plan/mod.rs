@@ -58,8 +58,26 @@ pub(crate) enum GaitCommand {
         /// ε of the output controller, 1/s.
         #[arg(long, default_value_t = 10.0)]
         epsilon: f64,
+        /// Also walk the gait under this runtime config's joint PD (its gains, its scale of the
+        /// plan's feed-forward, its reference lead) with references `--latency-s` late, and
+        /// print the speed it settles at: what the robot walks, not the plan.
+        #[arg(long)]
+        runtime: Option<PathBuf>,
+        /// Sample-to-action latency of the joint commands, s (with `--runtime`): 3 ms makes
+        /// the prediction match the simulated robot's walked speeds (docs/planning.md).
+        #[arg(long, default_value_t = DEFAULT_LATENCY_S, requires = "runtime")]
+        latency_s: f64,
     },
 }
+
+/// `adam gait check --latency-s` by default, s: the simulated bus applies a command about
+/// 2.5 ms after the sample it was computed from (one period on the wire, then the period it
+/// acts over), and the pitch estimate lags a little more; fitted to the simulator's walked
+/// speeds (docs/planning.md, "The gait under the runtime's controller").
+pub(crate) const DEFAULT_LATENCY_S: f64 = 0.003;
+
+/// Steps walked by `adam gait check --runtime`, and how many of the last are measured.
+const RUNTIME_WALK_STEPS: (usize, usize) = (30, 10);
 
 /// `--backend ripopt|native`.
 pub(crate) fn parse_backend(
@@ -190,7 +208,12 @@ pub(crate) fn plan_command(
 }
 
 /// `adam gait check`: prints the verification report; fails naming what failed.
-pub(crate) fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
+pub(crate) fn gait_check(
+    path: &std::path::Path,
+    epsilon: f64,
+    runtime: Option<&std::path::Path>,
+    latency_s: f64,
+) -> Result<()> {
     let path = &shipped::input(path);
     let (gait, robot) = planner::verify::load_gait_and_robot(path)?;
     let options = planner::verify::VerifyOptions {
@@ -212,5 +235,70 @@ pub(crate) fn gait_check(path: &std::path::Path, epsilon: f64) -> Result<()> {
         bail!("{} fails its check: {}", path.display(), failed.join("; "));
     }
     println!("stable periodic orbit");
+    if let Some(config) = runtime {
+        walk_under_runtime(&robot, &gait, config, latency_s)?;
+    }
+    Ok(())
+}
+
+/// `adam gait check --runtime CONFIG`: walks the gait from its planned post-impact state under
+/// the config's joint PD with the plan's feed-forward (times its scale), the references
+/// `latency_s` less the config's lead late ([`planner::verify::Law::JointPd`]), and prints the
+/// speed of the last steps. Informational: a gait that does not keep walking is reported, not
+/// failed (the check above is about the plan).
+fn walk_under_runtime(
+    robot: &PlanarModel,
+    gait: &model::gait::GaitFile,
+    config_path: &std::path::Path,
+    latency_s: f64,
+) -> Result<()> {
+    if !(latency_s.is_finite() && latency_s >= 0.0) {
+        bail!("--latency-s = {latency_s}: must be finite and at least 0");
+    }
+    let config = runtime::config::RuntimeConfig::load(config_path)?;
+    let g = &config.gains;
+    let same = |v: &[f64; 4], field: &str| -> Result<f64> {
+        if v.iter().all(|&x| x == v[0]) {
+            Ok(v[0])
+        } else {
+            bail!(
+                "{}: gains.{field} = {v:?}: `adam gait check --runtime` walks one gain for every \
+                 joint",
+                config_path.display()
+            )
+        }
+    };
+    let kp = same(&g.kp_nm_per_rad, "kp_nm_per_rad")?;
+    let kd = same(&g.kd_nm_s_per_rad, "kd_nm_s_per_rad")?;
+    let scale = g.plan_feedforward_scale;
+    let lead_s = config.walk.reference_lead_s;
+    let delay_s = (latency_s - lead_s).max(0.0);
+    let law = planner::verify::Law::runtime_pd(gait, kp, kd, scale, delay_s);
+    let cl = planner::verify::ClosedLoop::new(robot, gait, Default::default())?.with_law(law);
+    let x0 = cl.planned_state(gait, "walk from")?;
+    println!(
+        "under the joint PD of {} ({kp} N·m/rad, {kd} N·m·s/rad, the plan's feed-forward ×{scale}), \
+         references {:.1} ms late (latency {:.1} ms, lead {:.1} ms):",
+        config_path.display(),
+        1e3 * delay_s,
+        1e3 * latency_s,
+        1e3 * lead_s
+    );
+    let (steps, measured) = RUNTIME_WALK_STEPS;
+    match cl.walk(&x0, steps, measured) {
+        Ok(w) => {
+            let plan = gait.step_length_m / gait.step_duration_s;
+            println!(
+                "  steps {}–{steps} from the planned x⁺: {:.4} m in {:.4} s, {:.4} m/s ({:.1} % of \
+                 the plan's {plan:.4} m/s)",
+                steps - measured + 1,
+                w.length_m,
+                w.duration_s,
+                w.speed_mps(),
+                100.0 * w.speed_mps() / plan
+            );
+        }
+        Err(e) => println!("  the robot does not keep walking: {e}"),
+    }
     Ok(())
 }
