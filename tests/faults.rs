@@ -27,7 +27,9 @@ fn setup() -> &'static Setup {
 fn log_path(name: &str) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("faults");
     std::fs::create_dir_all(&dir).expect("test log folder");
-    dir.join(format!("{name}.mcap"))
+    // Per process: cargo-nextest runs each test in a process of its own, and each writes the
+    // baseline's log.
+    dir.join(format!("{name}-{}.mcap", std::process::id()))
 }
 
 /// One event at `FAULT_AT_S`.

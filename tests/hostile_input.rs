@@ -137,7 +137,8 @@ fn real_log() -> &'static [u8] {
     static LOG: std::sync::OnceLock<Vec<u8>> = std::sync::OnceLock::new();
     LOG.get_or_init(|| {
         let setup = runtime::Setup::shipped().expect("shipped setup");
-        let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("hostile-real.mcap");
+        let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+            .join(format!("hostile-real-{}.mcap", std::process::id()));
         let mut options = runtime::sim::run::SimWalkOptions::new(0.3);
         options.log_path = Some(path.clone());
         runtime::sim::run::walk(&setup, &options).expect("short walk");

@@ -31,7 +31,8 @@ fn walk_log() -> &'static [u8] {
     LOG.get_or_init(|| {
         std::fs::create_dir_all(dir()).expect("dir");
         let setup = runtime::Setup::shipped().expect("shipped setup");
-        let path = dir().join("walk.mcap");
+        // Per process: cargo-nextest runs each test in a process of its own, each writing it.
+        let path = dir().join(format!("walk-{}.mcap", std::process::id()));
         let mut options = runtime::sim::run::SimWalkOptions::new(5.0);
         options.log_path = Some(path.clone());
         runtime::sim::run::walk(&setup, &options).expect("walk");

@@ -41,7 +41,8 @@ fn original() -> &'static Original {
     static LOG: std::sync::OnceLock<Original> = std::sync::OnceLock::new();
     LOG.get_or_init(|| {
         let setup = runtime::Setup::shipped().expect("shipped setup");
-        let path = dir().join("log-damage-original.mcap");
+        // Per process: cargo-nextest runs each test in a process of its own, each writing it.
+        let path = dir().join(format!("log-damage-original-{}.mcap", std::process::id()));
         let mut options = runtime::sim::run::SimWalkOptions::new(4.0);
         options.log_path = Some(path.clone());
         runtime::sim::run::walk(&setup, &options).expect("walk");

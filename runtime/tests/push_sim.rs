@@ -127,8 +127,13 @@ fn assert_rides_through(force_n: f64) {
 /// +7.5 N [4, 5, 4, 5, 4] (seed 1 stalls at 10, 50 and 90 %); with σ following the belt speed
 /// (`speed.command_share = 0`) +7.5 N at 90 % rode through in 3 of 5.
 #[test]
-fn small_pushes_ride_through_at_five_points_of_a_step() {
+fn small_backward_pushes_ride_through_at_five_points_of_a_step() {
     assert_rides_through(-5.0);
+}
+
+/// The forward half of the small pushes above (a test of its own, so the two run side by side).
+#[test]
+fn small_forward_pushes_ride_through_at_five_points_of_a_step() {
     assert_rides_through(7.5);
 }
 
