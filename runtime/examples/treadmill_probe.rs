@@ -4,7 +4,8 @@
 //! ```text
 //! cargo run --release -p runtime --example treadmill_probe -- CONFIG SPEED OFFSET SEED
 //! ```
-//! Speed control with every gain 0 (CONFIG should say so, so that σ is the belt speed) on an
+//! Speed control with every gain 0 (CONFIG should say so, `speed.position_gain_per_s` too, which
+//! acts when `position_gain_per_step` is 0, so that σ is the belt speed) on an
 //! endless belt at SPEED m/s, the operator's offset stepped by OFFSET m/s at 30 s, 60 s with
 //! noise seed SEED; one line per step on stdout: t (s), length (m), duration (s), speed (m/s),
 //! position on the belt (m). The closed-loop scenarios (constant belts, the belt step, pushes,
