@@ -27,6 +27,7 @@ use crate::slots::{MotorSample, LEG_SLOTS, OUTPUTS, SLOTS};
 use crate::telemetry::frames::{BusOp, FrameBatch};
 use crate::telemetry::log::{LogContext, LogRecord, LogStats, TickRecord};
 use crate::telemetry::sample::{LoopStats, StateSample};
+use crate::telemetry::speed_read::SpeedRow;
 use crate::{Result, RuntimeError, Setup};
 use core::time::Duration;
 use drivers::a1::{Command, MotorId, Reply};
@@ -223,6 +224,9 @@ impl TrackingStats {
     }
 }
 
+/// The most `/speed` rows a [`RunSummary`] keeps: some 40 minutes of steps.
+pub const MAX_SUMMARY_SPEED_ROWS: usize = 4096;
+
 /// What a run did.
 #[derive(Clone, Debug)]
 pub struct RunSummary {
@@ -244,6 +248,10 @@ pub struct RunSummary {
     pub trip: Option<Trip>,
     /// Every state change (time, from, to) — at most the first 64.
     pub transitions: Vec<(f64, ControlState, ControlState)>,
+    /// Every speed-control update, the `/speed` rows as a log holds them (read back by
+    /// [`crate::telemetry::speed_read::read_speed`]), whether the run logs or not: at most the
+    /// first [`MAX_SUMMARY_SPEED_ROWS`] (room made before the loop, so the tick never allocates).
+    pub speed_rows: Vec<SpeedRow>,
     /// The last state sample.
     pub last_sample: StateSample,
     /// Controller tick compute time.
@@ -478,6 +486,7 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
     let mut histogram = Histogram::new();
     let mut wake_histogram = Histogram::new();
     let mut transitions = Vec::with_capacity(64);
+    let mut speed_rows = Vec::with_capacity(MAX_SUMMARY_SPEED_ROWS);
     let mut script = options.script.iter().peekable();
     let ticks = (options.duration_s * rate_hz).round().max(0.0) as u64;
     let (mut overruns, mut streak, mut max_streak) = (0u64, 0u32, 0u32);
@@ -588,6 +597,10 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
                 transitions.push((t, from, to));
             }
         }
+        if status.speed_update && speed_rows.len() < speed_rows.capacity() {
+            let true_position_m = backend.true_belt_position_m();
+            speed_rows.push(SpeedRow::from_update(t, &status.speed, true_position_m));
+        }
         if let Some(tx) = log_tx.as_mut() {
             tx.push(LogRecord::Tick(TickRecord {
                 tick,
@@ -659,6 +672,7 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
         final_state: out.status.state,
         trip: out.status.trip,
         transitions,
+        speed_rows,
         last_sample: sample,
         tick_times: histogram.times(),
         wake_latency: wake_histogram.times(),

@@ -42,6 +42,19 @@ fn run(
     let report = walk(&setup, &options).expect("walk");
     let rows = read_speed(&log).expect("speed rows");
     let _ = std::fs::remove_file(&log);
+    // The run's summary holds the same rows, logged or not (what the slow tests read).
+    let kept = &report.summary.speed_rows;
+    assert_eq!(
+        kept.len(),
+        rows.len(),
+        "as many rows in the summary as in the log"
+    );
+    for (k, (a, b)) in kept.iter().zip(&rows).enumerate() {
+        assert!(
+            a.same_as(b),
+            "row {k}: the summary's {a:?}, the log's {b:?}"
+        );
+    }
     (report, rows)
 }
 

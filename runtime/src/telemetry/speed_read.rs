@@ -1,6 +1,7 @@
 //! Reading the `/speed` channel back ([`crate::telemetry::speed_log`]): the rows
 //! `adam plot speed` draws.
 
+use crate::control::SpeedStatus;
 use crate::telemetry::speed_log::SPEED_TOPIC;
 use crate::{Result, RuntimeError};
 use serde_json::Value;
@@ -27,6 +28,40 @@ pub struct SpeedRow {
     pub library_mps: f64,
     /// The command was clamped to the library's range.
     pub clamped: bool,
+}
+
+impl SpeedRow {
+    /// The row a log's `/speed` message of this update reads back as
+    /// ([`crate::telemetry::speed_log::speed_json`]: a value that is not finite is `null`,
+    /// read as NaN; no true position is NaN).
+    pub fn from_update(t_s: f64, s: &SpeedStatus, true_position_m: Option<f64>) -> Self {
+        let num = |x: f64| if x.is_finite() { x } else { f64::NAN };
+        Self {
+            t_s,
+            belt_mps: num(s.belt_mps),
+            commanded_mps: num(s.commanded_mps),
+            requested_mps: num(s.requested_mps),
+            step_speed_mps: num(s.step_speed_mps),
+            position_m: num(s.position_m),
+            true_position_m: true_position_m.map_or(f64::NAN, num),
+            library_mps: num(s.library_mps),
+            clamped: s.clamped,
+        }
+    }
+
+    /// Whether two rows hold the same values, NaN equal to NaN.
+    pub fn same_as(&self, other: &Self) -> bool {
+        let eq = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
+        eq(self.t_s, other.t_s)
+            && eq(self.belt_mps, other.belt_mps)
+            && eq(self.commanded_mps, other.commanded_mps)
+            && eq(self.requested_mps, other.requested_mps)
+            && eq(self.step_speed_mps, other.step_speed_mps)
+            && eq(self.position_m, other.position_m)
+            && eq(self.true_position_m, other.true_position_m)
+            && eq(self.library_mps, other.library_mps)
+            && self.clamped == other.clamped
+    }
 }
 
 /// Reads the `/speed` messages of the log at `path` (every chunk that survives). Errors name
