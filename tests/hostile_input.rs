@@ -142,7 +142,10 @@ fn real_log() -> &'static [u8] {
         let mut options = runtime::sim::run::SimWalkOptions::new(0.3);
         options.log_path = Some(path.clone());
         runtime::sim::run::walk(&setup, &options).expect("short walk");
-        std::fs::read(&path).expect("log written")
+        let bytes = std::fs::read(&path).expect("log written");
+        // Held in memory from here: the file would only pile up in target/tmp.
+        std::fs::remove_file(&path).ok();
+        bytes
     })
 }
 

@@ -36,7 +36,10 @@ fn walk_log() -> &'static [u8] {
         let mut options = runtime::sim::run::SimWalkOptions::new(5.0);
         options.log_path = Some(path.clone());
         runtime::sim::run::walk(&setup, &options).expect("walk");
-        std::fs::read(&path).expect("log")
+        let bytes = std::fs::read(&path).expect("log");
+        // Held in memory from here: the file would only pile up in target/tmp.
+        std::fs::remove_file(&path).ok();
+        bytes
     })
 }
 

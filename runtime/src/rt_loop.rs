@@ -252,6 +252,9 @@ pub struct RunSummary {
     /// [`crate::telemetry::speed_read::read_speed`]), whether the run logs or not: at most the
     /// first [`MAX_SUMMARY_SPEED_ROWS`] (room made before the loop, so the tick never allocates).
     pub speed_rows: Vec<SpeedRow>,
+    /// Speed-control updates past [`MAX_SUMMARY_SPEED_ROWS`], left out of `speed_rows` (a run
+    /// that relies on every row can check this is 0).
+    pub speed_rows_dropped: u64,
     /// The last state sample.
     pub last_sample: StateSample,
     /// Controller tick compute time.
@@ -487,6 +490,7 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
     let mut wake_histogram = Histogram::new();
     let mut transitions = Vec::with_capacity(64);
     let mut speed_rows = Vec::with_capacity(MAX_SUMMARY_SPEED_ROWS);
+    let mut speed_rows_dropped = 0_u64;
     let mut script = options.script.iter().peekable();
     let ticks = (options.duration_s * rate_hz).round().max(0.0) as u64;
     let (mut overruns, mut streak, mut max_streak) = (0u64, 0u32, 0u32);
@@ -580,7 +584,9 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
             },
         );
         sample.true_pitch_rad = backend.true_pitch_rad().unwrap_or(f64::NAN);
-        sample.true_belt_position_m = backend.true_belt_position_m().unwrap_or(f64::NAN);
+        // Asked once per tick: the sample, the summary's row and the log all take this value.
+        let true_position_m = backend.true_belt_position_m();
+        sample.true_belt_position_m = true_position_m.unwrap_or(f64::NAN);
         #[cfg(feature = "iceoryx2")]
         if let Some(p) = publisher.as_mut() {
             p.publish(&sample);
@@ -597,9 +603,12 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
                 transitions.push((t, from, to));
             }
         }
-        if status.speed_update && speed_rows.len() < speed_rows.capacity() {
-            let true_position_m = backend.true_belt_position_m();
-            speed_rows.push(SpeedRow::from_update(t, &status.speed, true_position_m));
+        if status.speed_update {
+            if speed_rows.len() < speed_rows.capacity() {
+                speed_rows.push(SpeedRow::from_update(t, &status.speed, true_position_m));
+            } else {
+                speed_rows_dropped += 1;
+            }
         }
         if let Some(tx) = log_tx.as_mut() {
             tx.push(LogRecord::Tick(TickRecord {
@@ -615,7 +624,7 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
                 tx.push(LogRecord::Speed {
                     t_s: t,
                     speed: status.speed,
-                    true_position_m: backend.true_belt_position_m(),
+                    true_position_m,
                 });
             }
             if let (true, Some(trip)) = (status.new_trip, status.trip) {
@@ -673,6 +682,7 @@ pub fn run_on_this_thread<B: Backend, C: Clock>(
         trip: out.status.trip,
         transitions,
         speed_rows,
+        speed_rows_dropped,
         last_sample: sample,
         tick_times: histogram.times(),
         wake_latency: wake_histogram.times(),

@@ -47,6 +47,8 @@ fn original() -> &'static Original {
         options.log_path = Some(path.clone());
         runtime::sim::run::walk(&setup, &options).expect("walk");
         let bytes = std::fs::read(&path).expect("log");
+        // Held in memory from here: the file would only pile up in target/tmp.
+        std::fs::remove_file(&path).ok();
         let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
         let chunks = summary
             .chunk_indexes

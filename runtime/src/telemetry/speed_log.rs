@@ -28,12 +28,24 @@ pub fn speed_schema() -> Value {
         "integral_mps": number(), "step_offset_m": number(), "step_lean_rad": number()}})
 }
 
+/// `x` if finite, else NaN: the value a `/speed` field reads back as (a value that is not
+/// finite is written `null`, and `null` reads as NaN). The one mapping the log writer and
+/// [`crate::telemetry::speed_read::SpeedRow::from_update`] share.
+pub fn finite_or_nan(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        f64::NAN
+    }
+}
+
 /// A finite number, or `null`.
 fn num(x: f64) -> Value {
-    if x.is_finite() {
-        json!(x)
-    } else {
+    let x = finite_or_nan(x);
+    if x.is_nan() {
         Value::Null
+    } else {
+        json!(x)
     }
 }
 

@@ -35,7 +35,7 @@ impl SpeedRow {
     /// ([`crate::telemetry::speed_log::speed_json`]: a value that is not finite is `null`,
     /// read as NaN; no true position is NaN).
     pub fn from_update(t_s: f64, s: &SpeedStatus, true_position_m: Option<f64>) -> Self {
-        let num = |x: f64| if x.is_finite() { x } else { f64::NAN };
+        let num = crate::telemetry::speed_log::finite_or_nan;
         Self {
             t_s,
             belt_mps: num(s.belt_mps),
