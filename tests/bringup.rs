@@ -74,18 +74,27 @@ fn calibrate_writes_a_new_config_with_the_offsets_and_the_flip_and_never_in_plac
     ]);
     assert!(!ok && stderr.contains("never writes in place"), "{stderr}");
     // A config that extends another: refused, naming both (its copy could not find its base).
+    let lab = dir.join("lab.toml");
+    std::fs::write(
+        &lab,
+        format!(
+            "extends = {:?}\n",
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("configs/runtime/adam_treadmill.toml")
+        ),
+    )
+    .expect("written");
     let (ok, _, stderr) = adam(&[
         "calibrate",
         "--backend",
         "sim",
         "--config",
-        "configs/runtime/adam_treadmill_options.toml",
+        lab.to_str().expect("path"),
         "--out",
         dir.join("options.toml").to_str().expect("path"),
     ]);
     assert!(
-        !ok && stderr.contains("adam_treadmill_options.toml extends")
-            && stderr.contains("adam_treadmill.toml"),
+        !ok && stderr.contains("lab.toml extends") && stderr.contains("adam_treadmill.toml"),
         "{stderr}"
     );
     assert!(!dir.join("options.toml").exists());

@@ -96,10 +96,22 @@ fn every_config_file_loads_and_validates() {
 }
 
 /// `configs/runtime/adam_treadmill.toml` is `adam.toml` with speed control on: every section but
-/// `[speed]` is the same, so the two cannot drift apart.
+/// `[speed]` is the same but for the reference lead and the unbiased touchdown pitch, so the two
+/// cannot drift apart.
 #[test]
 fn the_treadmill_config_is_the_shipped_config_but_for_its_speed_section() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/runtime");
+    // Besides [speed], the treadmill config's own values: the 2.5 ms reference lead and the
+    // unbiased touchdown pitch its walked-speed calibration was measured with.
+    let own: [(&str, &str, toml::Value); 3] = [
+        ("walk", "reference_lead_s", toml::Value::Float(0.0025)),
+        ("estimator", "encoder_lag_samples", toml::Value::Integer(1)),
+        (
+            "estimator",
+            "touchdown_after_impact",
+            toml::Value::Boolean(true),
+        ),
+    ];
     let read = |name: &str| -> toml::Table {
         let text = std::fs::read_to_string(dir.join(name)).expect(name);
         let mut table: toml::Table = text.parse().unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -109,7 +121,23 @@ fn the_treadmill_config_is_the_shipped_config_but_for_its_speed_section() {
         );
         table
     };
-    let (shipped, treadmill) = (read("adam.toml"), read("adam_treadmill.toml"));
+    let (shipped, mut treadmill) = (read("adam.toml"), read("adam_treadmill.toml"));
+    for (section, key, want) in &own {
+        let table = treadmill
+            .get_mut(*section)
+            .and_then(|t| t.as_table_mut())
+            .unwrap_or_else(|| panic!("adam_treadmill.toml: no [{section}]"));
+        let got = table.remove(*key);
+        assert_eq!(
+            got.as_ref(),
+            Some(want),
+            "adam_treadmill.toml: {section}.{key}"
+        );
+        // adam.toml's value, if it has one, is the one the treadmill config replaces.
+        if let Some(v) = shipped[*section].get(*key) {
+            table.insert((*key).to_string(), v.clone());
+        }
+    }
     for (key, value) in &shipped {
         assert_eq!(
             treadmill.get(key),

@@ -57,9 +57,11 @@
 //! measures again at the next tick, after the impact, whose error has the other sign (each of
 //! the two with σ·√2). With both, 0.225 m/s gait, seed 1, 40 s: pitch RMS against the truth
 //! 0.058° (0.137° without), its steps 0.577–0.605 s after 10 s (0.615–0.699 s without). They
-//! stay off in the shipped configs: unbiased, the slow gaits walk far faster than planned
+//! stay off in `adam.toml`: unbiased, the slow gaits walk far faster than planned
 //! (the measurements and why: `runtime::control::speed`, "The pitch estimate drives the slow
-//! wander"). The demo's gait so corrected (`adam run --backend sim --duration 30s` with
+//! wander"). The treadmill config (`configs/runtime/adam_treadmill.toml`) turns both on since
+//! 2026-12-06, with the whole 2.5 ms reference lead and a walked-speed calibration identified
+//! with them (README, "Treadmill speeds"). The demo's gait so corrected (`adam run --backend sim --duration 30s` with
 //! `adam.toml` plus the two settings) walks 0.2168 m/s against its 0.1667 m/s plan and off
 //! the front of the belt at 14.6 s (pitch RMS 0.044°; shipped: 30 s, 0.1642 m/s, 0.109°).
 //!

@@ -25,7 +25,7 @@ pub(crate) const RUNTIME_CONFIG: &str = "configs/runtime/adam.toml";
 pub(crate) const CONFIG_DIR_ENV: &str = "ADAM_CONFIG_DIR";
 
 /// The files shipped in `configs/`, embedded: (path under `configs/`, contents).
-const EMBEDDED: [(&str, &str); 19] = [
+const EMBEDDED: [(&str, &str); 18] = [
     (
         "runtime/adam.toml",
         include_str!("../../configs/runtime/adam.toml"),
@@ -33,10 +33,6 @@ const EMBEDDED: [(&str, &str); 19] = [
     (
         "runtime/adam_treadmill.toml",
         include_str!("../../configs/runtime/adam_treadmill.toml"),
-    ),
-    (
-        "runtime/adam_treadmill_options.toml",
-        include_str!("../../configs/runtime/adam_treadmill_options.toml"),
     ),
     (
         "foxglove/adam.json",
@@ -193,12 +189,16 @@ mod tests {
         .expect("the embedded config and gait load, the gait's URDF found beside it");
         assert!(setup.gait.speed_mps > 0.0);
         // A config that extends another finds its base, and the library, among them.
-        let options = runtime::Setup::load(
-            root.join("runtime/adam_treadmill_options.toml"),
-            root.join("gaits/adam_codesign.json"),
+        let lab = root.join("runtime/lab.toml");
+        std::fs::write(
+            &lab,
+            "extends = \"adam_treadmill.toml\"\n[speed]\nstart_on_plan = false\n",
         )
-        .expect("the embedded options config, its base and its gait library load");
-        assert!(options.config.speed.start_on_plan && !options.library.is_empty());
+        .expect("written");
+        let options = runtime::Setup::load(&lab, root.join("gaits/adam_codesign.json")).expect(
+            "a config extending the embedded treadmill config, its base and its gait library load",
+        );
+        assert!(!options.config.speed.start_on_plan && !options.library.is_empty());
         let (_, robot) = planner::verify::load_gait_and_robot(&root.join("gaits/adam_walk.json"))
             .expect("the other gait and its robot");
         assert!(!robot.joints.is_empty());

@@ -120,31 +120,28 @@ mod tests {
         dir
     }
 
-    /// The shipped options config is the treadmill config with its three options on, nothing
-    /// else changed.
+    /// A config that extends the shipped treadmill config by a path and changes two values is
+    /// that config with those two changed, nothing else; its chain names the base.
     #[test]
-    fn the_options_config_is_the_treadmill_config_with_three_speed_settings() {
-        let base = RuntimeConfig::load(format!("{CONFIGS}/adam_treadmill.toml")).unwrap();
-        let options =
-            RuntimeConfig::load(format!("{CONFIGS}/adam_treadmill_options.toml")).unwrap();
-        assert!(!base.speed.start_on_plan && base.speed.max_step_lean_rad == 0.0);
-        let mut want = base.clone();
-        let s = &mut want.speed;
-        s.step_lean_gain_rad_per_mps = 0.2;
-        s.slow_step_lean_gain_rad_per_mps = 0.1;
-        s.max_step_lean_rad = 0.006;
-        s.step_lean_from_mps = 0.16;
-        s.step_lean_full_mps = 0.22;
-        s.step_length_after_impact = true;
-        s.start_on_plan = true;
-        assert_eq!(options, want);
-        let chain = extends_chain(Path::new(&format!("{CONFIGS}/adam_treadmill_options.toml")));
-        assert_eq!(
-            chain.unwrap(),
-            [Path::new(CONFIGS).join("adam_treadmill.toml")]
+    fn a_config_extending_the_treadmill_config_is_it_with_its_own_values() {
+        let base_path = format!("{CONFIGS}/adam_treadmill.toml");
+        let base = RuntimeConfig::load(&base_path).unwrap();
+        assert!(base.speed.start_on_plan && base.speed.max_step_lean_rad > 0.0);
+        let dir = folder("lab");
+        let path = dir.join("lab.toml");
+        let text = format!(
+            "extends = {base_path:?}\n[speed]\nstart_on_plan = false\nmax_step_lean_rad = 0.004\n"
         );
-        let none = extends_chain(Path::new(&format!("{CONFIGS}/adam_treadmill.toml")));
+        std::fs::write(&path, text).unwrap();
+        let lab = RuntimeConfig::load(&path).unwrap();
+        let mut want = base.clone();
+        want.speed.start_on_plan = false;
+        want.speed.max_step_lean_rad = 0.004;
+        assert_eq!(lab, want);
+        assert_eq!(extends_chain(&path).unwrap(), [PathBuf::from(&base_path)]);
+        let none = extends_chain(Path::new(&base_path));
         assert!(none.unwrap().is_empty());
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     /// A missing base, a base that is not a string, a chain that loops, a bad value laid over a

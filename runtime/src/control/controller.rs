@@ -544,10 +544,17 @@ impl Controller {
         // Standing after Ramp on a treadmill (the operator gave its belt speed) both feet are on
         // the belt: the legs measure the pitch (the one that levels the feet, as at a
         // touchdown), which the belt's acceleration does not bias as it tilts the
-        // accelerometer's gravity (`runtime::estimator`).
+        // accelerometer's gravity (`runtime::estimator`). Compared with the latest estimate,
+        // whatever `estimator.encoder_lag_samples` says: standing, the torso does not turn
+        // between the encoders' sample and the IMU's, and a measurement made every tick against
+        // the estimate of a sample before closes the loop through a delay. With the lag on, a
+        // walk from Stand onto a belt at 0.25 m/s launched 0.8 s later and ran off the back of
+        // the belt in seed 4 (`adam bench treadmill`, table (d)).
         if self.state == ControlState::Stand && self.stand_hold.is_none() && self.regulator.active()
         {
-            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad);
+            let pitch = self.touchdown_pitch_rad(&leg_q);
+            self.estimator
+                .measure_pitch_lagged(pitch, self.touchdown_pitch_sigma_rad, 0);
         }
         // The tick after an impact: the legs' pitch again, the new stance foot down, the old
         // one just lifting (its error has the other sign of the impact tick's).
