@@ -78,8 +78,9 @@
 //! down, lever, lean and σ braked together and the step stalled, 3 of 5 falls), in a Stop's
 //! approach, in a settle, and in the first `integral_delay_steps` impacts of any walk.
 //!
-//! **Off in the shipped configs** (each way it misses a figure the treadmill config meets,
-//! below). Measured with the treadmill config and h = 0.2, h⁻ = 0.1, λ_max = 6 mrad, σ from
+//! **Off in the shipped configs until 2026-12-06** (each way it missed a figure the treadmill
+//! config met, below; on in the treadmill config since, with the unbiased pitch: "Where it
+//! stands"). Measured with the treadmill config and h = 0.2, h⁻ = 0.1, λ_max = 6 mrad, σ from
 //! 0.16 to 0.22 m/s (`adam bench treadmill --config CONFIG`), before → with the lean, seeds 1–5: max |position| after 10 s at 0.15 / 0.20 / 0.25 / 0.30 / 0.35 m/s 0.124 /
 //! 0.170 / 0.262 / 0.123 / 0.111 → 0.125 / 0.174 / 0.118 / 0.100 / 0.099 m, walked/belt 101.2
 //! / 101.9 / 101.1 / 100.8 / 100.6 → 101.3 / 101.2 / 100.8 / 100.7 / 100.5 %; seeds 6–10:
@@ -466,47 +467,28 @@
 //! configs: the correction is right, but the slow gaits then need a library that walks its
 //! plan (the loop delay and the stiffness above) before the treadmill can use it.
 //!
-//! # Where it stands (2026-12-05, seeds 1–5, `adam bench treadmill`, the treadmill config)
-//! **With the library down to 0.125 m/s** (docs/gait-library.md, "Step bounds"; its
-//! calibration above; `launch_gait_fraction` 0.4): 0.15–0.35 m/s: no fall, no trip (none in
-//! seeds 6–10 either); walked/belt 101.2 / 101.9 / 101.1 / 100.8 / 100.6 % after 10 s (seeds
-//! 6–10: 101.1 / 101.1 / 100.0 / 100.5 / 100.5 %), within the issue's 2 % at every speed:
-//! the 0.125 m/s gait walks 0.130 m/s, so on a 0.15 m/s belt the command has room below the
-//! belt; max |position| after 10 s 0.124 / 0.170 / 0.262 / 0.123 / 0.111 m (seeds 6–10:
-//! 0.122 / 0.307 / 0.298 / 0.131 / 0.109 m; asked: 0.10 m). The belt step rides through in
-//! 10 of 10 but matches more slowly: up 10, 11, 2, 3, 10 and down 9, 1, 8, 1, 17 steps
-//! (seeds 6–10: 1, 2, 14, 9, 16 and 12, 1, 10, 16, 1), within 8 both ways in 3 of 10
-//! (before: 8 of 10), |position| up to 0.44 m (seeds 6–10: 0.55 m). Pushes: −20 N 2, 0, 4, 5,
-//! 5 and 2, 1, 5, 5, 5 of 5 (seeds 1–5, 6–10; before 3, 0, 5, 5, 5 and 2, 0, 4, 5, 5), +40 N
-//! 0 of 50 (before 1), bisection 2–5 N backward (as before), 5–10 N forward (before 8–10 N).
-//! Table (d) 5 of 5 in each case, seeds 1–10. How much of the change is the 0.125 m/s gait:
-//! the old library re-planned with the new step bound (its gaits moved by at most 2e-6 s),
-//! without that gait and with the old calibration, seeds 1–5: 0.383 / 0.388 / 0.296 / 0.132 /
-//! 0.106 m, 105.5 % at 0.15 m/s, the belt step never matched going down in seed 5, −20 N 2, 1,
-//! 4, 5, 5: the belt step and the pushes move as much with gaits 2e-6 s apart (the runs are
-//! that sensitive), the 0.15 m/s belt only with the slower gait. The new gait with the old
-//! calibration (0.130 added): 0.185 / 0.348 / 0.353 / 0.132 / 0.106 m, the belt step within
-//! 8 steps in 5 of 5: not kept (0.20 and 0.25 m/s worse than today).
+//! # Where it stands (2026-12-06, seeds 1–5, `adam bench treadmill`, the treadmill config)
+//! The treadmill config now walks with the estimator corrected (above) and the whole 2.5 ms
+//! reference lead (`walk.reference_lead_s = 0.0025`): with speed control's gains at 0 no library
+//! gait stalls (60 runs), and its walked-speed calibration is identified with them (0.134 …
+//! 0.422 m/s for the 0.125 … 0.40 m/s gaits; docs/gait-library.md). On that walk the step lean,
+//! the step length after the impact and the start on the plan are on, and the step lever is
+//! 0.06 s (0.1 s stalled the start at 0.20 m/s in seed 3, 0.04 s took 22 steps down the belt
+//! step in seed 3). Stand measures the legs' pitch against the latest estimate whatever the
+//! encoder lag (`controller`: with the lag a walk from Stand on the 0.25 m/s belt launched
+//! 0.8 s later and ran off the back of the belt in seed 4). Figures:
+//! - 0.15–0.35 m/s: no fall, no trip; walked/belt 100.0 / 100.1 / 99.5 / 99.9 / 99.8 %; max
+//!   |position| after 10 s 0.079 / 0.082 / 0.100 / 0.057 / 0.070 m (0.1004 m at 0.25 m/s in
+//!   seed 2: the issue's 0.10 m missed by 0.4 mm); seeds 6–10 0.139 / 0.113 / 0.167 / 0.093 /
+//!   0.089 m; between the bench's belts (0.155–0.17 m/s) 25 of 25 walk, within 0.168 m;
+//! - the belt step: up 1, 1, 1, 1, 3 and down 3, 1, 1, 1, 1 steps, |position| at most 0.129 m
+//!   (seeds 6–10: down 9, 1, 2, 1, 1, at most 0.241 m);
+//! - table (d): 5 of 5 in each case over seeds 1–10;
+//! - pushes: −20 N 0, 0, 0, 5, 0 of 5 ridden through (3, 0, 4, 0, 5 more walk on after a
+//!   relaunch), +40 N 0, 0, 2, 5, 0; largest at every point 8–10 N back, 5–10 N forward.
 //!
-//! **Before it** (the 0.15–0.40 m/s library) with the walked-speed calibration: 0.15–0.35 m/s:
-//! no fall, no trip (none in seeds 6–10 either); walked/belt 104.9 / 101.9 / 100.9 / 100.8 / 100.6 % after 10 s (the 0.15 m/s
-//! belt is slower than the slowest gait walks, 0.154 m/s: the robot stays ahead of the
-//! centre); max |position| after 10 s 0.376 / 0.187 / 0.310 / 0.132 / 0.106 m (asked:
-//! 0.10 m; before the calibration 0.265 / 0.191 / 0.260 / 0.132 / 0.112 m and 103.4 / 100.7 /
-//! 99.4 / 99.8 / 100.1 %). The belt step 0.20 → 0.30 → 0.20 m/s rides through in 5 of 5,
-//! matching the belt in 1–3 steps going up and 1–5 going down but in seed 5 (10 and 24;
-//! before: 3–12 and 2–23; asked: 8), |position| 0.15–0.25 m but 0.61 m in seed 5 (before up
-//! to 0.64 m). The position swings with the slow creep of the walked speed ("The walked-speed
-//! calibration"). Backward pushes of −20 N at 10, 30 and 90 % of the step stall the step
-//! under way (0 of 5; 5 of 5 at 50 and 70 %), which no per-step lever reaches: it acts at
-//! the next impact. +40 N rode through at every point but one seed at 10 % — within a
-//! 4 s watch after the push. Watched to 12 s (the scenario since 2026-12-05), +40 N rides
-//! through 0 of 5 at every point: the push carries the robot ahead, the position loop takes
-//! the library down to a slow gait that stalls. The stall relaunch
-//! (`runtime::control::recovery`) restarts a stalled step from double support: −20 N then
-//! walks on in 3, 0, 5, 5, 5 of 5 (its module docs); a relaunched run stalled, so it no longer
-//! rides through: −20 N 0, 0, 5, 5, 0 of 5; +40 N 0 of 5, with the disturbance settle 0, 1, 0,
-//! 3, 0 (below, "Forward pushes").
+//! The figures of the configs before (2026-12-05 and earlier): docs/gait-library.md, "Where
+//! it stood".
 //!
 //! # Forward pushes (traced 2026-12-05, the treadmill config, +40 N for 0.2 s at 0.25 m/s)
 //! Before the disturbance settle (below): `adam run --backend sim --config configs/runtime/adam_treadmill.toml --belt 0.25 --push
