@@ -2,8 +2,10 @@
 //! read as TOML; with a top-level `extends` (a file name, relative to this file's folder) its
 //! base is read the same way (a chain of at most [`MAX_EXTENDS_DEPTH`] files) and this file's
 //! values are laid over it: tables merge key by key, every other value (a number, a string, an
-//! array, an array of tables such as `leg_motors`) replaces the base's whole. Paths inside the
-//! merged config (`speed.library`) stay relative to the file that is loaded, not to its base.
+//! array, an array of tables such as `leg_motors`) replaces the base's whole. A path inside a
+//! config (`speed.library`) is relative to the folder of the file that names it: a base's is
+//! anchored to the base's folder as it is read (made absolute), so a config in any folder may
+//! extend a shipped one; a path the extending file sets itself stays relative to that file.
 //! What copies or hashes a config takes its chain along ([`extends_chain`]): a treadmill sweep
 //! hashes every file of it; `adam calibrate`, which writes a copy of one whole config's text,
 //! refuses a config that extends another, naming its base.
@@ -83,8 +85,32 @@ fn merge_chain(path: &Path, text: &str, chain: &mut Vec<PathBuf>) -> Result<toml
     }
     chain.push(base_path.clone());
     let mut base = merge_chain(&base_path, &read_text(&base_path)?, chain)?;
+    anchor_paths(&mut base, base_path.parent().unwrap_or(Path::new(".")));
     lay_over(&mut base, value);
     Ok(base)
+}
+
+/// The config's keys that hold a file path, relative to the folder of the file that sets them.
+const PATH_KEYS: [(&str, &str); 1] = [("speed", "library")];
+
+/// Makes the relative paths of `value` (a base's merged TOML) absolute from `dir`, the base's
+/// folder (absolute paths, those of deeper bases included, are left as they are).
+fn anchor_paths(value: &mut toml::Value, dir: &Path) {
+    for (section, key) in PATH_KEYS {
+        let Some(slot) = value.get_mut(section).and_then(|t| t.get_mut(key)) else {
+            continue;
+        };
+        let Some(rel) = slot.as_str() else {
+            continue; // the config's own check names a path that is not a string
+        };
+        if Path::new(rel).is_absolute() {
+            continue;
+        }
+        // Absolute from the process's folder, so that the loaded file's folder does not
+        // prefix it again.
+        let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+        *slot = toml::Value::String(dir.join(rel).display().to_string());
+    }
 }
 
 /// Lays `over` onto `base`: tables key by key, anything else replaced.
@@ -120,8 +146,9 @@ mod tests {
         dir
     }
 
-    /// A config that extends the shipped treadmill config by a path and changes two values is
-    /// that config with those two changed, nothing else; its chain names the base.
+    /// A config in another folder that extends the shipped treadmill config by a path and
+    /// changes two values is that config with those two changed, and its gait library anchored
+    /// to the base's folder (the file is found); its chain names the base.
     #[test]
     fn a_config_extending_the_treadmill_config_is_it_with_its_own_values() {
         let base_path = format!("{CONFIGS}/adam_treadmill.toml");
@@ -137,7 +164,20 @@ mod tests {
         let mut want = base.clone();
         want.speed.start_on_plan = false;
         want.speed.max_step_lean_rad = 0.004;
+        let library = std::path::absolute(CONFIGS)
+            .unwrap()
+            .join(base.speed.library.as_deref().unwrap());
+        want.speed.library = Some(library.display().to_string());
         assert_eq!(lab, want);
+        assert!(library.is_file(), "{}", library.display());
+        // Set in the extending file, a path is relative to that file.
+        std::fs::write(
+            &path,
+            format!("extends = {base_path:?}\n[speed]\nlibrary = \"x.json\"\n"),
+        )
+        .unwrap();
+        let own = RuntimeConfig::load(&path).unwrap();
+        assert_eq!(own.speed.library.as_deref(), Some("x.json"));
         assert_eq!(extends_chain(&path).unwrap(), [PathBuf::from(&base_path)]);
         let none = extends_chain(Path::new(&base_path));
         assert!(none.unwrap().is_empty());
