@@ -485,7 +485,8 @@
 //!   (seeds 6–10: down 9, 1, 2, 1, 1, at most 0.241 m);
 //! - table (d): 5 of 5 in each case over seeds 1–10;
 //! - pushes: −20 N 0, 0, 0, 5, 0 of 5 ridden through (3, 0, 4, 0, 5 more walk on after a
-//!   relaunch), +40 N 0, 0, 2, 5, 0; largest at every point 8–10 N back, 5–10 N forward.
+//!   relaunch), +40 N 0, 4, 5, 5, 0 with the settle cut to 3 steps ("The disturbance
+//!   settle"); largest at every point 8–10 N back, 5–10 N forward.
 //!
 //! The figures of the configs before (2026-12-05 and earlier): docs/gait-library.md, "Where
 //! it stood".
@@ -516,8 +517,11 @@
 //! land long (the swing leg lags, the stance leg passes θ⁻) and the energy swings from step to
 //! step until one starts with too little momentum.
 //!
-//! **The disturbance settle (kept; `disturbance_settle_mps` 0.13, `disturbance_settle_steps` 6
-//! in the treadmill config, off by default).** The trigger: a step more than 0.13 m/s faster
+//! **The disturbance settle (kept; `disturbance_settle_mps` 0.13, `disturbance_settle_steps` 3
+//! in the treadmill config, 6 until 2026-12-06; off by default).** With the treadmill config of
+//! 2026-12-06, seeds 1–5, +40 N at 10/30/50/70/90 % rides through 0, 0, 2, 5, 0 of 5 with 6
+//! steps, 0, 1, 5, 5, 0 with 2, 0, 4, 5, 5, 0 with 3 (seeds 6–10: 0, 5, 3, 4, 0), 0, 3, 5, 5, 0
+//! with 4; at 30 % the longer settle walks the pushed robot off the front of the belt. The trigger: a step more than 0.13 m/s faster
 //! than the operator's speed (not in a Stop nor in the steps after a launch); the command follows
 //! the robot: the last step's speed less `max_change_per_step_mps` (0.02 m/s), never below the
 //! operator's; the first such impact sets σ without the step limit (the gait that walks the
