@@ -486,7 +486,10 @@
 //! - table (d): 5 of 5 in each case over seeds 1–10;
 //! - pushes: −20 N 0, 0, 0, 5, 0 of 5 ridden through (3, 0, 4, 0, 5 more walk on after a
 //!   relaunch), +40 N 0, 4, 5, 5, 0 with the settle cut to 3 steps ("The disturbance
-//!   settle"); largest at every point 8–10 N back, 5–10 N forward.
+//!   settle"); largest at every point 8–10 N back, 5–10 N forward;
+//! - what got worse (seeds 11–20 against the config before): −20 N at 50 % stalls its step in
+//!   10 of 10 (ridden through 10 of 10 before), and seed 17's launch from Stand runs off the
+//!   back of the belt (docs/gait-library.md, "Shipped").
 //!
 //! The figures of the configs before (2026-12-05 and earlier): docs/gait-library.md, "Where
 //! it stood".
