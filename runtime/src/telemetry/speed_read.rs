@@ -48,20 +48,6 @@ impl SpeedRow {
             clamped: s.clamped,
         }
     }
-
-    /// Whether two rows hold the same values, NaN equal to NaN.
-    pub fn same_as(&self, other: &Self) -> bool {
-        let eq = |a: f64, b: f64| a == b || (a.is_nan() && b.is_nan());
-        eq(self.t_s, other.t_s)
-            && eq(self.belt_mps, other.belt_mps)
-            && eq(self.commanded_mps, other.commanded_mps)
-            && eq(self.requested_mps, other.requested_mps)
-            && eq(self.step_speed_mps, other.step_speed_mps)
-            && eq(self.position_m, other.position_m)
-            && eq(self.true_position_m, other.true_position_m)
-            && eq(self.library_mps, other.library_mps)
-            && self.clamped == other.clamped
-    }
 }
 
 /// Reads the `/speed` messages of the log at `path` (every chunk that survives). Errors name

@@ -80,11 +80,17 @@ impl Controller {
     }
 
     /// The legs' pitch ([`Self::touchdown_pitch_rad`]) into the estimator, with standard
-    /// deviation `sigma_rad`, against its estimate at the encoders' sample.
-    pub(super) fn measure_legs_pitch(&mut self, leg_q: &[f64; LEG_SLOTS], sigma_rad: f64) {
+    /// deviation `sigma_rad`, against its estimate `lag_samples` IMU samples back (the
+    /// encoders' sample: `estimator.encoder_lag_samples` at a touchdown).
+    pub(super) fn measure_legs_pitch(
+        &mut self,
+        leg_q: &[f64; LEG_SLOTS],
+        sigma_rad: f64,
+        lag_samples: usize,
+    ) {
         let pitch = self.touchdown_pitch_rad(leg_q);
         self.estimator
-            .measure_pitch_lagged(pitch, sigma_rad, self.encoder_lag_samples);
+            .measure_pitch_lagged(pitch, sigma_rad, lag_samples);
     }
 
     /// The torso pitch at which both feet are at the same height for these joint angles (both
