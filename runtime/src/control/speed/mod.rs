@@ -498,11 +498,12 @@
 //!   settle"); largest at every point 8–10 N back, 5–10 N forward (the same with 6 mrad);
 //! - what got worse (seeds 11–20 against the config before): −20 N at 50 % stalls its step in
 //!   10 of 10 (ridden through 10 of 10 before), and seed 17's launch from Stand runs off the
-//!   back of the belt (docs/gait-library.md, "Shipped"). The −20 N at 50 % is the encoder lag's:
-//!   with `estimator.encoder_lag_samples = 0` on this config it rides through 5 of 5 (seeds
-//!   1–5, the other tables not run), with `touchdown_after_impact = false` 4 of 5; without the
-//!   lag the pushed step lands short (seed 2: 0.167 m in 1.14 s against 0.193 m in 0.89 s) and
-//!   the next step passes over its foot. Why the lag lengthens that step is open.
+//!   back of the belt (docs/gait-library.md, "Shipped"). −20 N at 50 %, seeds 1–5, one key
+//!   undone at a time (the other tables not run): `encoder_lag_samples = 0` rides through 5 of
+//!   5, `touchdown_after_impact = false` and `start_on_plan = false` 4 (a relaunch, a joint
+//!   limit); no lead, no step length after the impact or the lever at 0.1 s 0. Without the lag
+//!   the pushed step lands short (seed 2: 0.167 m in 1.14 s against 0.193 m in 0.89 s) and the
+//!   next step passes over its foot. Why is open.
 //!
 //! The figures of the configs before (2026-12-05 and earlier): docs/gait-library.md, "Where
 //! it stood".
