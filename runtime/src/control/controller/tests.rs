@@ -628,3 +628,46 @@ fn a_held_walk_relaunches_once_then_trips_the_step_timeout() {
     assert_eq!(s.trip.map(|t| t.name()), Some("step_timeout"));
     assert_eq!(s.recoveries, 0);
 }
+
+/// Stand on a belt whose speed is known measures the legs' pitch every tick against the latest
+/// estimate whatever `estimator.encoder_lag_samples` (the choice measured in `Controller::tick`:
+/// with the lag there, a walk from Stand onto the 0.25 m/s belt launched 0.8 s later). Two
+/// harnesses, lag 0 and lag 1, their IMU 0.02 rad off the legs' pitch so that every
+/// measurement moves the estimate: their estimators stay identical bit for bit, while at the
+/// same states a lagged measurement would have moved the estimate elsewhere.
+#[test]
+fn stand_on_a_known_belt_measures_the_legs_pitch_unlagged_whatever_the_encoder_lag() {
+    let mut hs = [0, 1].map(|lag| {
+        Harness::with_config(PhaseSource::TimeBased, |c| {
+            c.estimator.encoder_lag_samples = lag;
+        })
+    });
+    for h in &mut hs {
+        h.pitch_rad += 0.02;
+        h.go_stand();
+        h.step(Some(OperatorCommand::Belt { speed_mps: 0.25 }));
+    }
+    let sigma_rad = hs[1].c.touchdown_pitch_sigma_rad;
+    let mut lag_would_matter = 0;
+    for _ in 0..500 {
+        for h in &mut hs {
+            assert_eq!(h.step(None).state, ControlState::Stand);
+        }
+        let (a, b) = (&hs[0].c.estimator, &hs[1].c.estimator);
+        assert_eq!(a.pitch_rad().to_bits(), b.pitch_rad().to_bits());
+        assert_eq!(a.gyro_bias_rad_s().to_bits(), b.gyro_bias_rad_s().to_bits());
+        // The same measurement, lagged and not, from this state.
+        let legs_rad = b.pitch_rad() - 0.01;
+        let (mut lagged, mut latest) = (*b, *b);
+        lagged.measure_pitch_lagged(legs_rad, sigma_rad, 1);
+        latest.measure_pitch_lagged(legs_rad, sigma_rad, 0);
+        if lagged.pitch_rad() != latest.pitch_rad() {
+            lag_would_matter += 1;
+        }
+    }
+    // The estimate moves every tick (gyro and measurements), so the lag would change each one.
+    assert!(lag_would_matter >= 490, "{lag_would_matter} of 500");
+    // The measurements did act: the estimate left the IMU's pitch toward the legs'.
+    let imu_rad = hs[1].pitch_rad;
+    assert!((hs[1].c.estimator.pitch_rad() - imu_rad).abs() > 1e-3);
+}
