@@ -100,6 +100,23 @@
 //!   without progress, phase rate ≤ 0.3 /s: 0.5 s from the measured rate (kept) 25 and 25 of
 //!   25; from rest 24 and 24; 0.6 s 24 and 25; 0.4 s 24 and 25; after 0.9, 1.1 or
 //!   1.2 s, 23–24 of 25 for −20 N.
+//!
+//! Tried within the step and not kept (2026-12-06, the treadmill config, −20 N at 50 % of the
+//! step, seeds 1–5, where the step after the pushed one stalls; scratch code, not in the tree):
+//! - a shorter step once slow: from τ 0.5 to 0.85, the step lever's offset set to −0.2 m per m/s
+//!   of the orbit's momentum deficit (σ*(τ) − σ over M·L, above 0.05 m/s; at most 4 cm). The
+//!   pushed steps landed 0.147–0.158 m (0.19 m without) and the next steps still stalled: 4
+//!   step timeouts and a joint limit (without: 4 relaunches, 1 step timeout);
+//! - crouching the stance leg while the step is slow: with a point foot the leg's force passes
+//!   through the foot, so σ keeps its value as the leg shortens, and the momentum the step loses
+//!   before its apex scales as the leg length cubed (a point mass on a telescoping leg:
+//!   d(σ²/2)/dφ = −M²·g·r³·sin φ). The torso moved toward the stance foot by k·(e − e₀), pitch
+//!   and swing foot kept (`Geometry::solve`), faded out from τ 0.45–0.5 to 0.85: torque
+//!   saturation in 23 of 25 runs over the five gain sets tried (k 0.3–1 m per m/s, at most 4–8
+//!   cm, 0.2–0.5 m/s; the other two a relaunch and a step timeout), and traced on seed 1 with a 0.1 m/s rate the crouch reached 4.5 cm only by τ 0.35 of the
+//!   next step, whose phase then peaked at 0.346 (0.326 without) and ran back. The deficit is
+//!   known at the pushed step's impact; a crouch would have to be there from the next step's
+//!   τ = 0.
 
 use super::transitions::LaunchTiming;
 use crate::safety::ProgressWatch;
