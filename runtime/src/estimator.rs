@@ -413,9 +413,6 @@ mod tests {
         assert_eq!(est.pitch_rad(), before);
     }
 
-    /// The torso turning at 1 rad/s, the legs' pitch taken one IMU sample before the IMU's (the
-    /// simulated bus): compared with the estimate of its own time it leaves the estimate where
-    /// it is; compared with the latest estimate (lag 0) it pulls it back by a sample's turn.
     /// A still robot whose legs measure the pitch every sample (Stand on a treadmill), with a
     /// constant gyro bias of 2 mrad/s: lagged by a sample or not, the estimate converges alike
     /// (from 50 ms on, pitch within 1e-5 rad and bias within 1e-4 rad/s of each other). So a
@@ -453,6 +450,9 @@ mod tests {
         );
     }
 
+    /// The torso turning at 1 rad/s, the legs' pitch taken one IMU sample before the IMU's (the
+    /// simulated bus): compared with the estimate of its own time it leaves the estimate where
+    /// it is; compared with the latest estimate (lag 0) it pulls it back by a sample's turn.
     #[test]
     fn a_lagged_measurement_is_compared_with_the_estimate_of_its_time() {
         let (dt, rate) = (1e-3, -1.0);

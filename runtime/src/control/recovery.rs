@@ -113,10 +113,10 @@
 //!   d(σ²/2)/dφ = −M²·g·r³·sin φ). The torso moved toward the stance foot by k·(e − e₀), pitch
 //!   and swing foot kept (`Geometry::solve`), faded out from τ 0.45–0.5 to 0.85: torque
 //!   saturation in 23 of 25 runs over the five gain sets tried (k 0.3–1 m per m/s, at most 4–8
-//!   cm, 0.2–0.5 m/s; the other two a relaunch and a step timeout), and traced on seed 1 with a 0.1 m/s rate the crouch reached 4.5 cm only by τ 0.35 of the
-//!   next step, whose phase then peaked at 0.346 (0.326 without) and ran back. The deficit is
-//!   known at the pushed step's impact; a crouch would have to be there from the next step's
-//!   τ = 0.
+//!   cm, 0.2–0.5 m/s; the other two a relaunch and a step timeout); traced on seed 1 with a
+//!   0.1 m/s rate, the crouch reached 4.5 cm only by τ 0.35 of the next step, whose phase then
+//!   peaked at 0.346 (0.326 without) and ran back. The deficit is known at the pushed step's
+//!   impact; a crouch would have to be there from the next step's τ = 0.
 
 use super::transitions::LaunchTiming;
 use crate::safety::ProgressWatch;

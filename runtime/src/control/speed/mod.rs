@@ -488,10 +488,7 @@
 //! - the belt step: up 1, 1, 1, 1, 3 and down 1, 1, 1, 1, 1 steps, |position| at most 0.113 m
 //!   (3, 1, 1, 1, 1 and 0.129 m); seeds 6–10: down 9, 1, 2, 17, 1, at most 0.260 m (9, 1, 2, 1,
 //!   1 and 0.241 m: seed 9's step down got worse); seeds 11–20 at most 9 steps and 0.265 m
-//!   (0.277 m). Neighbours: 8 mrad took 9 steps down in seed 4 (0.252 m); a gain h of 0.25
-//!   (6 mrad) tripped a joint limit on the 0.15 m/s belt in one of seeds 6–10; the position
-//!   gain 0.16 / 0.18, the integral gain 0.09 / 0.11 and the reference glide 0.01 / 0.03 m/s
-//!   left the 0.25 m/s belt at 0.100–0.136 m;
+//!   (0.277 m). The neighbouring gains each miss a figure (docs/gait-library.md, "Shipped");
 //! - table (d): 5 of 5 in each case over seeds 1–10 (and 9, 9, 10 of 10 over seeds 11–20);
 //! - pushes: −20 N 0, 0, 0, 5, 0 of 5 ridden through (3, 0, 4, 0, 5 more walk on after a
 //!   relaunch), +40 N 0, 4, 5, 5, 0 with the settle cut to 3 steps ("The disturbance
