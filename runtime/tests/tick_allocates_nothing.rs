@@ -266,3 +266,105 @@ fn the_stall_relaunch_allocates_nothing() {
     assert_eq!(out.status.recoveries, 1, "the relaunch ran");
     assert_eq!(allocations, 0, "Controller::tick allocated");
 }
+
+/// The step-back catch (`speed.step_back_catch_m`) allocates nothing either: the joints follow
+/// the gait's outputs forward to τ = 0.3 and back to 0 (a step whose phase runs back, the swing
+/// foot low and behind), so the controller sets the swing foot down, catches the robot from
+/// double support and hands over, all inside the counted ticks.
+#[test]
+fn the_step_back_catch_allocates_nothing() {
+    let mut setup = Setup::shipped().expect("shipped setup");
+    setup.config.speed.step_back_catch_m = 0.05;
+    setup.config.speed.stall_relaunch_s = 0.0;
+    setup.config.safety.stall_timeout_s = 1e9;
+    let q0 = setup
+        .gait
+        .initial_state
+        .clone()
+        .expect("an initial state")
+        .q;
+    let pitch = q0[2];
+    // The leg slot of each output, for the stance side whose outputs at τ = 0 are the initial
+    // state's joints.
+    let slot_of = |stance: model::Side| -> Vec<usize> {
+        setup
+            .gait
+            .outputs
+            .iter()
+            .map(|o| {
+                let name = o.joint_name(stance);
+                runtime::config::LEG_JOINT_NAMES
+                    .iter()
+                    .position(|n| *n == name)
+                    .expect("an output on a leg joint")
+            })
+            .collect()
+    };
+    let joint_q = |slot: usize| {
+        let j = setup
+            .model
+            .require_joint(runtime::config::LEG_JOINT_NAMES[slot])
+            .expect("a leg joint");
+        q0[setup.model.joints[j].coordinate]
+    };
+    let outputs_at = |tau: f64| -> Vec<f64> {
+        let b = &setup.gait.bezier.alpha;
+        b.iter().map(|row| model::bezier::eval(row, tau)).collect()
+    };
+    let stance = [model::Side::Left, model::Side::Right]
+        .into_iter()
+        .find(|&side| {
+            slot_of(side)
+                .iter()
+                .zip(outputs_at(0.0))
+                .all(|(&slot, y)| (joint_q(slot) - y).abs() < 1e-6)
+        })
+        .expect("the initial state is the outputs at τ = 0");
+    let slots = slot_of(stance);
+    let mut c = setup.controller(false).expect("controller");
+    let mut input = TickInput::default();
+    for m in input.motors.iter_mut() {
+        (m.fresh, m.temperature_c) = (true, 30.0);
+    }
+    let mut out = TickOutput::default();
+    assert!(c.begin_walk_at_step_start(0.0, &mut out.status));
+    // τ(t): up to 0.3 in 0.5 s, back to 0 in the next 0.6 s, then held.
+    let tau = |t: f64| {
+        if t < 0.5 {
+            0.6 * t
+        } else {
+            (0.3 - 0.5 * (t - 0.5)).max(0.0)
+        }
+    };
+    let tau_rate = |t: f64| match t {
+        t if t < 0.5 => 0.6,
+        t if t < 1.1 => -0.5,
+        _ => 0.0,
+    };
+    let mut y = [0.0; 4];
+    let mut dy = [0.0; 4];
+    let ((), allocations) = counted(|| {
+        for k in 1..2500u32 {
+            input.t_s = f64::from(k) * 1e-3;
+            for (i, row) in setup.gait.bezier.alpha.iter().enumerate() {
+                y[i] = model::bezier::eval(row, tau(input.t_s));
+                dy[i] = model::bezier::eval_d1(row, tau(input.t_s)) * tau_rate(input.t_s);
+            }
+            for (i, &slot) in slots.iter().enumerate() {
+                (input.motors[slot].q_rad, input.motors[slot].dq_rad_s) = (y[i], dy[i]);
+            }
+            input.imu = Some(ImuSample {
+                t_s: input.t_s,
+                gyro_pitch_rad_s: runtime::backend::test_dither_rad_s(input.t_s),
+                accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
+                accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
+            });
+            c.tick(&input, &mut out);
+        }
+    });
+    assert_eq!(out.status.trip, None);
+    assert_eq!(out.status.state, ControlState::Walk);
+    assert_eq!(out.status.catches, 1, "the catch ran");
+    assert_eq!(out.status.recoveries, 0);
+    assert_eq!(allocations, 0, "Controller::tick allocated");
+}

@@ -190,6 +190,11 @@ pub struct SpeedConfig {
     /// `safety.stall_timeout_s`, which stays the last resort. Acts with or without a library.
     #[serde(default)]
     pub stall_relaunch_s: f64,
+    /// The step-back catch, m (0, the default: off): a Walk step whose swing foot lands at
+    /// least this far behind the stance foot while the robot moves back is caught at once in
+    /// double support and launched again (`runtime::control::recovery`, "The step-back catch").
+    #[serde(default)]
+    pub step_back_catch_m: f64,
 }
 
 /// Where the robot's position along the belt comes from.
@@ -238,6 +243,7 @@ impl Default for SpeedConfig {
             stop_approach_mps: 0.0,
             stop_library_mps: 0.0,
             stall_relaunch_s: 0.0,
+            step_back_catch_m: 0.0,
         }
     }
 }
@@ -296,6 +302,7 @@ impl SpeedConfig {
             ("speed.stop_approach_mps", self.stop_approach_mps),
             ("speed.stop_library_mps", self.stop_library_mps),
             ("speed.stall_relaunch_s", self.stall_relaunch_s),
+            ("speed.step_back_catch_m", self.step_back_catch_m),
         ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(RuntimeError::InvalidField {

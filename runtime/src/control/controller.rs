@@ -18,6 +18,8 @@
 //!       landed pose's gravity torques fed forward
 //! Walk: no progress of τ for speed.stall_relaunch_s, at rest on both feet ──▶ relaunch from
 //!       double support (as Walk from Stand, 0.5 s; once per step; `recovery`)
+//! Walk: τ runs back, the swing foot low and speed.step_back_catch_m behind ──▶ set it down
+//!       behind, catch from double support, hand over (`recovery`, "The step-back catch")
 //! Walk/Stop: no progress of τ for safety.stall_timeout_s ──▶ Damping (Trip::StepTimeout)
 //!   ▼
 //! TickOutput { commands[14] (PD or damping, motor side), status }
@@ -64,7 +66,10 @@
 use super::double_support::Geometry;
 use super::gait_table::{side_index, GaitTable};
 use super::orbit::OrbitLever;
-use super::recovery::{StallDetector, RELAUNCH, RELAUNCH_MAX_PHASE_RATE_PER_S};
+use super::recovery::{
+    FallingBack, SetDown, StallDetector, CATCH_MAX_FOOT_HEIGHT_M, RELAUNCH,
+    RELAUNCH_MAX_PHASE_RATE_PER_S,
+};
 use super::speed::{SpeedLibrary, SpeedRegulator, StepLever};
 use super::tick::{ControlState, JointCommand, OperatorCommand, Status, TickInput, TickOutput};
 use super::transitions::{
@@ -82,6 +87,7 @@ use model::gait::GaitFile;
 use model::robot::{Legs, MAX_DOF};
 use model::{PlanarModel, Side};
 
+mod catch;
 mod commands;
 mod speed_switch;
 #[cfg(test)]
@@ -147,6 +153,12 @@ pub struct Controller {
     stall: StallDetector,
     /// Relaunches after a stalled step since start-up.
     recoveries: u32,
+    /// `speed.step_back_catch_m` (0: off), the step-back catches since start-up, whether the
+    /// step's phase runs back, and the swing foot being set down (`runtime::control::recovery`).
+    step_back_catch_m: f64,
+    catches: u32,
+    catch_watch: FallingBack,
+    set_down: Option<SetDown>,
     touchdown_ticks: u32,
     /// (time, swing-foot height) at the previous walking tick.
     last_foot: Option<(f64, f64)>,
@@ -324,6 +336,10 @@ impl Controller {
             progress: ProgressWatch::new(config.safety.stall_timeout_s),
             stall: StallDetector::new(config.speed.stall_relaunch_s),
             recoveries: 0,
+            step_back_catch_m: config.speed.step_back_catch_m,
+            catches: 0,
+            catch_watch: FallingBack::default(),
+            set_down: None,
             touchdown_ticks: 0,
             last_foot: None,
             phase_hat: None,
@@ -395,8 +411,9 @@ impl Controller {
             None => self.regulator.restart(),
         }
         self.step_lever.rest();
-        // As after an impact: a stall of this first step may relaunch.
+        // As after an impact: a stall of this first step may relaunch, or a catch follow.
         self.stall.restart(t_s, f64::NAN);
+        self.restart_catch();
         self.enter(ControlState::Walk, status);
         true
     }
@@ -663,6 +680,11 @@ impl Controller {
                     // The first step starts now (a time-based phase counts from here; the step
                     // timeout watches its phase from the next tick).
                     self.step_start_t_s = t;
+                    // After a catch the step may stall or run back again, like any step.
+                    if self.launch.is_some_and(|l| l.catch.is_some()) {
+                        self.stall.restart(t, eval.phase);
+                        self.restart_catch();
+                    }
                     self.launch = None;
                     self.last_foot = None;
                     // The same measured phase, now with the blend.
@@ -765,6 +787,7 @@ impl Controller {
                     self.observe_phase(t, &mut eval);
                     self.progress.restart(t, eval.phase);
                     self.stall.restart(t, eval.phase);
+                    self.restart_catch();
                 }
                 // A Walk step stalled, the robot nearly at rest on both feet (the swing foot
                 // landed at the stance foot's height): relaunch from double support
@@ -780,6 +803,20 @@ impl Controller {
                     if self.launch.is_some() {
                         self.recoveries = self.recoveries.saturating_add(1);
                     }
+                }
+                // The phase runs back, the swing foot low and behind the stance foot: the
+                // step-back catch (`recovery`) sets it down at once.
+                if self.state == ControlState::Walk
+                    && !self.braking
+                    && self.launch.is_none()
+                    && self.step_back_catch_m > 0.0
+                    && eval.foot_height_m <= CATCH_MAX_FOOT_HEIGHT_M
+                    && self.set_down.is_none()
+                    && self
+                        .catch_watch
+                        .falling_back(t, eval.phase, eval.phase_rate)
+                {
+                    self.begin_set_down(t, &leg_q, &leg_dq);
                 }
                 (y_des, dy_des) = (eval.y, eval.dy);
                 (phase, phase_rate, foot_h) = (eval.phase, eval.phase_rate, eval.foot_height_m);
@@ -798,6 +835,7 @@ impl Controller {
                     self.stand_commands(&mut out.commands);
                 } else {
                     self.lean(t, &leg_q, &leg_dq, &mut eval);
+                    self.set_down_outputs(t, &leg_q, &leg_dq, &mut eval);
                     (y_des, dy_des) = (eval.y, eval.dy);
                     self.walk_commands(&eval, &mut out.commands);
                 }
@@ -832,6 +870,7 @@ impl Controller {
             stance: self.stance,
             steps: self.steps,
             recoveries: self.recoveries,
+            catches: self.catches,
             phase,
             phase_rate_per_s: phase_rate,
             y_des_rad: y_des,

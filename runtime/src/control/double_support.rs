@@ -392,6 +392,13 @@ impl Geometry<'_> {
         Some((sigma, p))
     }
 
+    /// The whole-body centre of mass relative to the torso origin at `pitch_rad` and
+    /// `leg_q` (world axes), m. `None` if the kinematics fail.
+    pub fn com_offset(&self, pitch_rad: f64, leg_q: &[f64; LEG_SLOTS]) -> Option<[f64; 2]> {
+        let q = self.config([0.0, 0.0, pitch_rad], leg_q);
+        self.model.center_of_mass(&q[..self.dof]).ok()
+    }
+
     /// Leg joint torques that hold the robot still in double support at (`pose`, `leg_q`)
     /// against gravity, N·m (model direction, by leg slot): the torques of the smallest contact
     /// forces that balance the torso's three equations. `None` if the kinematics fail.

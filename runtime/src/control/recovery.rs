@@ -117,6 +117,59 @@
 //!   0.1 m/s rate, the crouch reached 4.5 cm only by τ 0.35 of the next step, whose phase then
 //!   peaked at 0.346 (0.326 without) and ran back. The deficit is known at the pushed step's
 //!   impact; a crouch would have to be there from the next step's τ = 0.
+//!
+//! # The step-back catch (2026-12-06)
+//! The relaunch above waits for the robot to come to rest: 1 s without progress, which the
+//! issue's "no stall" excludes. The catch acts as soon as the pushed step's phase runs back,
+//! the way a point-foot biped must answer a push that took its momentum: a step back, then the
+//! energy back from double support, without standing still.
+//! - **Trigger** (`Controller::tick`, Walk only, not braking, no launch under way, once per
+//!   step): the phase at least [`CATCH_BACK_PHASE`] below its highest value in the step and
+//!   falling faster than [`CATCH_BACK_RATE_PER_S`] for [`CATCH_BACK_FOR_S`] ([`FallingBack`]),
+//!   the swing foot at most [`CATCH_MAX_FOOT_HEIGHT_M`] high and at least
+//!   `speed.step_back_catch_m` (0.05 m in the treadmill config, 0 = off in `adam.toml`)
+//!   behind the stance foot.
+//! - **Set-down** ([`SetDown`], single support): the swing foot goes to the ground at least
+//!   [`CATCH_STEP_BACK_M`] behind the stance foot on a minimum-jerk path of
+//!   [`CATCH_SET_DOWN_S`] (to [`CATCH_PRESS_M`] below the ground); every output follows the
+//!   legs' inverse kinematics of the measured torso x, the pitch it had and a height low
+//!   enough that the rear knee stays bent at least 0.2 rad once down (searched when it
+//!   starts). Why each: following the gait's swing (τ running back) the foot came down 0.35 s
+//!   after the phase turned, the torso by then falling back at 0.41 m/s, faster than any pivot
+//!   between the feet stops; the legs at the gait's height reach the ground only ~0.13 m
+//!   behind (the knee at its 0.05 rad limit), so without lowering the torso the foot landed
+//!   short and the robot rocked back over it; carrying the torso (not only the foot) in this
+//!   phase pitched it back 0.07 rad in 80 ms (the swing leg's reaction through the stance hip).
+//! - **The catch proper** ([`Catch`], double support, a launch with [`CATCH`]): the centre of
+//!   mass on an inverted pendulum about a pivot between the feet, halfway to the rear foot or
+//!   further back so its divergent component leads it by [`CATCH_MIN_LEAD_M`] (none if that
+//!   is within [`CATCH_REAR_MARGIN_M`] of the rear foot: the walk goes on, the step timeout
+//!   stays the last resort); from the rate measured while the foot was still clear of the
+//!   ground (the landing shakes the joint rates: −0.31 m/s measured against −0.12 before); the
+//!   pitch back to the set-down's from rest; the torso lowered if the rear leg needs it; the
+//!   phase observer restarted. It hands over onto the orbit as a launch does, once the torso
+//!   moves forward and the measured momentum about the stance foot is [`CATCH_SIGMA_MARGIN`]
+//!   times σ*(θ) (at most [`CATCH_MAX_S`]); the step after it may stall or run back again and
+//!   be caught or relaunched like any other.
+//!
+//! Counted apart: `catches` on `/hzd`, in the run's report and in `adam bench treadmill`'s
+//! outcomes ("ok, 1 step back"). A caught run rides through
+//! (`runtime::sim::scenarios::rides_through`): it never stood still (seed 1, −20 N at 90 %:
+//! one catch, the longest time between touchdowns 0.992 s against 0.68 s for a gait step;
+//! `runtime/tests/push_sim.rs`).
+//!
+//! Measured (`adam bench treadmill --config configs/runtime/adam_treadmill.toml`, seeds 1–5,
+//! 49.0 s wall): −20 N rides through 4, 5, 4, 5, 5 of 5 at 10/30/50/70/90 % (18 of the 23 after
+//! one step back, the other 2 step timeouts), against 0, 0, 0, 5, 0 without it; seeds 6–10 5,
+//! 3, 4, 5, 5 (one run with two steps back; a fall off the back of the belt, 2 step timeouts).
+//! The largest backward push ridden through at every point 20, 20, 20, 12, 18 N (without:
+//! 5, 5, 5, 2, 5). Tables (a), (b) and (d) and the forward pushes (+40 N 0, 4, 5, 5, 0) are
+//! unchanged figure for figure: no catch fires in them. Tried (−20 N at 10, 50 and 90 %, seeds
+//! 1–5, ridden through of 15): the step back 0.15 or 0.16 m 11, 0.17 m 13 (kept), 0.19 m 9,
+//! 0.21 m 6; the hand-over at 1.0 × σ*(θ) 12 (the first step after the catch slower than the
+//! orbit's, 0.05–0.15 m/s over the foot against 0.16–0.21, and the next one stalled), 1.3 ×
+//! 13; with a 0.19 m step back 1.0 × 6, 1.3 × 9, 1.6 × 6, and the pivot 0.35 or 0.65 of the
+//! way 8 and 9 (0.5: 9).
 
 use super::transitions::LaunchTiming;
 use crate::safety::ProgressWatch;
@@ -138,6 +191,199 @@ pub(super) const RELAUNCH: LaunchTiming = LaunchTiming {
     earliest_s: RELAUNCH_EARLIEST_S,
     from_motion: true,
 };
+
+/// The catch starts with the swing foot at most this high, m ...
+pub(super) const CATCH_MAX_FOOT_HEIGHT_M: f64 = 0.04;
+/// ... once the phase runs back (its rate below minus this, 1/s) ...
+pub(super) const CATCH_BACK_RATE_PER_S: f64 = 0.15;
+/// ... for this long, s ...
+pub(super) const CATCH_BACK_FOR_S: f64 = 0.03;
+/// ... at least this far below its highest value in the step.
+pub(super) const CATCH_BACK_PHASE: f64 = 0.01;
+/// The swing foot is set down in this long, s ...
+pub(super) const CATCH_SET_DOWN_S: f64 = 0.12;
+/// ... at least this far behind the stance foot, m (0.15–0.21 tried: module docs) ...
+pub(super) const CATCH_STEP_BACK_M: f64 = 0.17;
+/// ... aimed this far below the ground, m (it lands for sure) ...
+pub(super) const CATCH_PRESS_M: f64 = 0.002;
+/// ... and is down once measured at most this high, m.
+pub(super) const CATCH_DOWN_M: f64 = 0.0;
+/// The catch's pivot sits this fraction of the way from the rear foot to the front foot ...
+pub(super) const CATCH_PIVOT_FRACTION: f64 = 0.5;
+/// ... or further back, so that the centre of mass's divergent component `x + v/ω` starts at
+/// least this far ahead of it, m (else the pendulum would carry it back past the pivot) ...
+pub(super) const CATCH_MIN_LEAD_M: f64 = 0.02;
+/// ... but no closer than this to the rear foot, m (else no catch).
+pub(super) const CATCH_REAR_MARGIN_M: f64 = 0.01;
+/// The torso lowers, if the rear foot needs it, over this long, s.
+pub(super) const CATCH_LOWER_S: f64 = 0.25;
+/// A catch hands over onto the orbit once the measured momentum is this many times σ*(θ)
+/// (1.0 stalled the step after the catch more often: module docs) ...
+pub(super) const CATCH_SIGMA_MARGIN: f64 = 1.3;
+/// ... or after this long at the latest, s.
+pub(super) const CATCH_MAX_S: f64 = 0.8;
+
+/// The catch proper's launch: from the measured motion, handing over as soon as the measured
+/// momentum allows.
+pub(super) const CATCH: LaunchTiming = LaunchTiming {
+    duration_s: CATCH_MAX_S,
+    earliest_s: 0.0,
+    from_motion: true,
+};
+
+/// Whether the step's phase runs back: at least [`CATCH_BACK_PHASE`] below its highest value
+/// since the step began, falling faster than [`CATCH_BACK_RATE_PER_S`] for
+/// [`CATCH_BACK_FOR_S`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct FallingBack {
+    peak: f64,
+    since_t_s: Option<f64>,
+    /// Off from a set-down to the next step ([`FallingBack::disarm`]).
+    armed: bool,
+}
+
+impl Default for FallingBack {
+    fn default() -> Self {
+        Self {
+            peak: f64::NEG_INFINITY,
+            since_t_s: None,
+            armed: true,
+        }
+    }
+}
+
+impl FallingBack {
+    /// No catch until the next step (a set-down began).
+    pub(super) fn disarm(&mut self) {
+        self.armed = false;
+    }
+
+    /// Feeds the phase and its rate at `t_s`; true once the phase runs back (never while
+    /// disarmed).
+    pub(super) fn falling_back(&mut self, t_s: f64, phase: f64, phase_rate: f64) -> bool {
+        if !self.armed {
+            return false;
+        }
+        self.peak = self.peak.max(phase);
+        if phase_rate < -CATCH_BACK_RATE_PER_S && self.peak - phase >= CATCH_BACK_PHASE {
+            let since = *self.since_t_s.get_or_insert(t_s);
+            t_s - since >= CATCH_BACK_FOR_S
+        } else {
+            self.since_t_s = None;
+            false
+        }
+    }
+}
+
+/// The catch's first part, in single support: the swing foot set down behind the stance foot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct SetDown {
+    pub(super) start_t_s: f64,
+    /// Where the foot was, relative to the stance foot, m.
+    pub(super) from_xz_m: [f64; 2],
+    /// Where it lands, m.
+    pub(super) to_x_m: f64,
+    /// The torso's pitch when it began, rad.
+    pub(super) pitch_rad: f64,
+    /// The torso's height when it began and when the foot lands, m.
+    pub(super) z0_m: f64,
+    pub(super) z1_m: f64,
+    /// The last joint solution (the next tick's Newton start), model rad.
+    pub(super) last_q: [f64; crate::slots::LEG_SLOTS],
+    /// The torso's forward rate, the last measured while the foot was clear of the ground
+    /// (the landing shakes the measured joint rates), m/s.
+    pub(super) v_air_mps: f64,
+}
+
+impl SetDown {
+    /// Where the foot aims `t_s` into the set-down (a minimum-jerk path to
+    /// [`CATCH_PRESS_M`] below the ground at `to_x_m`), and the torso's height, m.
+    pub(super) fn at(&self, t_s: f64) -> ([f64; 2], f64) {
+        let (s, _) = super::transitions::min_jerk(t_s / CATCH_SET_DOWN_S);
+        let to = [self.to_x_m, -CATCH_PRESS_M];
+        (
+            [
+                self.from_xz_m[0] + (to[0] - self.from_xz_m[0]) * s,
+                self.from_xz_m[1] + (to[1] - self.from_xz_m[1]) * s,
+            ],
+            self.z0_m + (self.z1_m - self.z0_m) * s,
+        )
+    }
+}
+
+/// The catch proper, in double support: the centre of mass follows an inverted pendulum about
+/// a pivot between the feet, `x'' = ω²(x − p)` (the centre of pressure held at `p`), which
+/// stops its backward motion and carries it forward.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Catch {
+    /// The pivot, relative to the stance (front) foot, m.
+    pub(super) pivot_x_m: f64,
+    /// √(g/z) of the centre of mass's height at the start, 1/s.
+    pub(super) omega_per_s: f64,
+    /// The centre of mass's x and forward rate at the start, m and m/s.
+    pub(super) x0_m: f64,
+    pub(super) v0_mps: f64,
+    /// The centre of mass ahead of the torso origin, m (held from the start).
+    pub(super) com_ahead_m: f64,
+    /// The torso's height at the start and once lowered, m.
+    pub(super) z0_m: f64,
+    pub(super) z1_m: f64,
+}
+
+impl Catch {
+    /// The catch of a centre of mass at `x0_m` moving at `v0_mps`, `height_m` above the feet,
+    /// the rear foot at `rear_x_m` (the front foot at 0), `com_ahead_m` ahead of the torso
+    /// origin; the torso at `z0_m`, lowered to `z1_m`. `None` if no pivot at least
+    /// [`CATCH_REAR_MARGIN_M`] ahead of the rear foot stops it.
+    pub(super) fn new(
+        (x0_m, v0_mps): (f64, f64),
+        height_m: f64,
+        rear_x_m: f64,
+        com_ahead_m: f64,
+        (z0_m, z1_m): (f64, f64),
+    ) -> Option<Self> {
+        if !(height_m > 0.0 && rear_x_m < 0.0 && x0_m.is_finite() && v0_mps.is_finite()) {
+            return None;
+        }
+        let omega_per_s = (crate::estimator::GRAVITY_MPS2 / height_m).sqrt();
+        let divergent = x0_m + v0_mps / omega_per_s;
+        let pivot_x_m = (rear_x_m * (1.0 - CATCH_PIVOT_FRACTION)).min(divergent - CATCH_MIN_LEAD_M);
+        (pivot_x_m >= rear_x_m + CATCH_REAR_MARGIN_M).then_some(Self {
+            pivot_x_m,
+            omega_per_s,
+            x0_m,
+            v0_mps,
+            com_ahead_m,
+            z0_m,
+            z1_m,
+        })
+    }
+
+    /// The torso's x (the centre of mass's less its offset) and forward rate `t_s` into the
+    /// catch, m and m/s.
+    pub(super) fn at(&self, t_s: f64) -> (f64, f64) {
+        let w = self.omega_per_s;
+        let (s, c) = ((w * t_s).sinh(), (w * t_s).cosh());
+        let d = self.x0_m - self.pivot_x_m;
+        (
+            self.pivot_x_m + d * c + self.v0_mps / w * s - self.com_ahead_m,
+            d * w * s + self.v0_mps * c,
+        )
+    }
+
+    /// The torso's height and its rate `t_s` into the catch (lowered on a minimum-jerk ramp
+    /// over [`CATCH_LOWER_S`]), m and m/s.
+    pub(super) fn height(&self, t_s: f64) -> (f64, f64) {
+        let (s, ds_du) = super::transitions::min_jerk(t_s / CATCH_LOWER_S);
+        let dz = self.z1_m - self.z0_m;
+        let rate = if t_s < CATCH_LOWER_S {
+            dz * ds_du / CATCH_LOWER_S
+        } else {
+            0.0
+        };
+        (self.z0_m + dz * s, rate)
+    }
+}
 
 /// Watches a Walk step for a stall on both feet; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -233,5 +479,114 @@ mod tests {
         assert!(!(1..3000).any(|k| d.check(f64::from(k) * 1e-3, 0.0, true)));
         let mut off = StallDetector::new(0.0);
         assert_eq!(run(&mut off, 5.0, |_| 0.2, |_| true), None);
+    }
+
+    /// The pendulum of a robot 0.05 m ahead of its rear foot moving back at 0.1 m/s.
+    fn moving_back() -> Catch {
+        Catch::new((-0.05, -0.1), 0.78, -0.17, -0.004, (0.69, 0.68)).unwrap()
+    }
+
+    #[test]
+    fn the_catch_starts_at_the_measured_state_and_follows_its_pendulum() {
+        let c = moving_back();
+        // At its start: the measured centre of mass less its offset, at the measured rate.
+        let (x, v) = c.at(0.0);
+        assert!((x - (-0.05 + 0.004)).abs() < 1e-12 && (v + 0.1).abs() < 1e-12);
+        // x'' = ω²(x − p) at every time (central second difference, 1e-4 s: truncation
+        // error ~ h²·ω⁴·|x|/12, far below 1e-6 m/s²); ẋ is the derivative of x.
+        let h = 1e-4;
+        for k in 0..8 {
+            let t = 0.1 * f64::from(k);
+            let x = |t: f64| c.at(t).0 + c.com_ahead_m;
+            let xdd = (x(t + h) - 2.0 * x(t) + x(t - h)) / (h * h);
+            let want = c.omega_per_s.powi(2) * (x(t) - c.pivot_x_m);
+            assert!((xdd - want).abs() < 1e-4, "t {t}: {xdd} vs {want}");
+            let xd = (x(t + h) - x(t - h)) / (2.0 * h);
+            assert!((xd - c.at(t).1).abs() < 1e-8, "t {t}");
+        }
+    }
+
+    #[test]
+    fn the_catch_stops_the_backward_motion_ahead_of_its_pivot_and_carries_the_robot_forward() {
+        let c = moving_back();
+        // The pivot halfway to the rear foot, or further back so the divergent component
+        // leads it by CATCH_MIN_LEAD_M: here −0.085 m and x + v/ω = −0.0782 m.
+        let divergent = c.x0_m + c.v0_mps / c.omega_per_s;
+        assert!(c.pivot_x_m <= -0.085 + 1e-12 && c.pivot_x_m <= divergent - CATCH_MIN_LEAD_M);
+        assert!(c.pivot_x_m >= -0.17 + CATCH_REAR_MARGIN_M);
+        // The rate crosses zero once, with the centre of mass still ahead of the pivot, and
+        // grows forward after.
+        let samples: Vec<(f64, f64)> = (0..=800).map(|k| c.at(f64::from(k) * 1e-3)).collect();
+        let turn = samples.iter().position(|&(_, v)| v > 0.0).unwrap();
+        assert!(turn > 0 && samples[turn..].windows(2).all(|w| w[1].1 > w[0].1));
+        let lowest = samples
+            .iter()
+            .map(|&(x, _)| x + c.com_ahead_m)
+            .fold(f64::MAX, f64::min);
+        assert!(lowest > c.pivot_x_m, "{lowest} vs {}", c.pivot_x_m);
+        assert!(samples[800].1 > 0.2, "{:?}", samples[800]);
+        // The torso lowers from z0 to z1 on a minimum-jerk ramp and stays.
+        assert_eq!(c.height(0.0), (0.69, 0.0));
+        assert!((c.height(CATCH_LOWER_S).0 - 0.68).abs() < 1e-12);
+        assert_eq!(c.height(1.0), (0.68, 0.0));
+    }
+
+    #[test]
+    fn no_catch_when_no_pivot_ahead_of_the_rear_foot_stops_the_robot() {
+        // 0.05 m ahead of the rear foot, the pivot at most 0.04 m behind the centre of mass
+        // (CATCH_REAR_MARGIN_M), which its divergent component must lead by
+        // CATCH_MIN_LEAD_M: caught if moving back slower than (0.04 − 0.02)·ω ≈ 0.071 m/s
+        // (ω = √(g/0.78 m) ≈ 3.55/s).
+        assert!(Catch::new((-0.12, -0.065), 0.78, -0.17, 0.0, (0.7, 0.7)).is_some());
+        assert!(Catch::new((-0.12, -0.075), 0.78, -0.17, 0.0, (0.7, 0.7)).is_none());
+        // Nonsense in, no catch out.
+        assert!(Catch::new((-0.05, f64::NAN), 0.78, -0.17, 0.0, (0.7, 0.7)).is_none());
+        assert!(Catch::new((-0.05, -0.1), 0.78, 0.1, 0.0, (0.7, 0.7)).is_none());
+    }
+
+    #[test]
+    fn the_phase_runs_back_only_below_its_peak_and_for_long_enough() {
+        let mut w = FallingBack::default();
+        // Rising: never.
+        assert!(!(0..300).any(|k| w.falling_back(f64::from(k) * 1e-3, 0.001 * f64::from(k), 1.0)));
+        // A falling rate just after the peak (within CATCH_BACK_PHASE of it): not yet.
+        assert!(!w.falling_back(0.300, 0.295, -0.5));
+        assert!(!w.falling_back(0.340, 0.292, -0.5));
+        // Past CATCH_BACK_PHASE below the peak, falling: only after CATCH_BACK_FOR_S of it.
+        assert!(!w.falling_back(0.400, 0.285, -0.5));
+        assert!(!w.falling_back(0.420, 0.280, -0.5));
+        assert!(w.falling_back(0.431, 0.276, -0.5));
+        // A slower fall (noise) restarts the wait.
+        assert!(!w.falling_back(0.432, 0.276, -0.1));
+        assert!(!w.falling_back(0.440, 0.274, -0.5));
+        // Disarmed (a set-down began): never.
+        w.disarm();
+        assert!(!(0..100).any(|k| w.falling_back(0.5 + f64::from(k) * 1e-3, 0.2, -1.0)));
+        // A new step forgets the peak.
+        let mut w = FallingBack::default();
+        assert!(!w.falling_back(0.0, -0.03, -2.0) && !w.falling_back(0.05, -0.032, -2.0));
+    }
+
+    #[test]
+    fn the_set_down_path_ends_below_the_ground_at_its_landing_point() {
+        let sd = SetDown {
+            start_t_s: 0.0,
+            from_xz_m: [-0.167, 0.019],
+            to_x_m: -0.17,
+            pitch_rad: -0.04,
+            z0_m: 0.695,
+            z1_m: 0.68,
+            last_q: [0.0; crate::slots::LEG_SLOTS],
+            v_air_mps: -0.1,
+        };
+        assert_eq!(sd.at(0.0), ([-0.167, 0.019], 0.695));
+        let (foot, z) = sd.at(CATCH_SET_DOWN_S);
+        assert!((foot[0] + 0.17).abs() < 1e-12 && (foot[1] + CATCH_PRESS_M).abs() < 1e-12);
+        assert!((z - 0.68).abs() < 1e-12);
+        // Monotone in between: down and back.
+        let path: Vec<[f64; 2]> = (0..=120).map(|k| sd.at(f64::from(k) * 1e-3).0).collect();
+        assert!(path
+            .windows(2)
+            .all(|w| w[1][1] <= w[0][1] && w[1][0] <= w[0][0]));
     }
 }

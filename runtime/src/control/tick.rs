@@ -275,6 +275,10 @@ pub struct Status {
     /// Relaunches from double support after a stalled step since start-up
     /// (`runtime::control::recovery`).
     pub recoveries: u32,
+    /// Step-back catches since start-up: a step whose phase ran back, its swing foot set down
+    /// behind and the robot carried forward again from double support
+    /// (`runtime::control::recovery`).
+    pub catches: u32,
     /// Phase τ (unclamped).
     pub phase: f64,
     /// τ̇, 1/s.
@@ -375,6 +379,7 @@ impl Default for TickOutput {
                 stance: Side::Left,
                 steps: 0,
                 recoveries: 0,
+                catches: 0,
                 phase: 0.0,
                 phase_rate_per_s: 0.0,
                 y_des_rad: [0.0; OUTPUTS],

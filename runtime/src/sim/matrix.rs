@@ -102,6 +102,7 @@ impl Run {
             speed_ratio_after_settle: speed_ratio_after(&report.step_records, SETTLE_S),
             steps_to_match,
             recoveries: report.summary.last_sample.recoveries,
+            catches: report.summary.last_sample.catches,
         }
     }
 }
@@ -134,6 +135,9 @@ pub struct RunSummary {
     /// Stalled steps the controller relaunched from double support (`speed.stall_relaunch_s`).
     #[serde(default)]
     pub recoveries: u32,
+    /// Steps caught after a step back (`speed.step_back_catch_m`): ridden through.
+    #[serde(default)]
+    pub catches: u32,
 }
 
 /// Walks `run` on the simulated robot of `setup` and summarizes it.

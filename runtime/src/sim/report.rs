@@ -271,6 +271,13 @@ impl std::fmt::Display for SimWalkReport {
             "safety trips: {trip} | falls: {fall} | repeated touchdowns {} | friction warnings {}",
             self.repeated_touchdowns, self.friction_exceeded
         )?;
+        if s.last_sample.catches > 0 {
+            writeln!(
+                f,
+                "steps caught after a step back (the phase ran back): {}",
+                s.last_sample.catches
+            )?;
+        }
         if s.last_sample.recoveries > 0 {
             writeln!(
                 f,

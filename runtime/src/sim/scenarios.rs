@@ -278,7 +278,10 @@ pub fn steps_to_match(steps: &[StepRecord], from_s: f64, until_s: f64) -> Option
 
 /// Issue #29's "ride through": no trip, no stall, no fall, still walking at the end. A step
 /// that stalled (1 s without phase progress) and was relaunched from double support
-/// (`speed.stall_relaunch_s`) stalled: such a run [`walks_on`] but does not ride through.
+/// (`speed.stall_relaunch_s`) stalled: such a run [`walks_on`] but does not ride through. A
+/// step caught after a step back (`speed.step_back_catch_m`: the phase ran back, the swing
+/// foot was set down behind at once and the robot carried forward from double support) did
+/// not stall, and [`outcome`] says how many there were.
 pub fn rides_through(r: &SimWalkReport) -> bool {
     walks_on(r) && r.summary.last_sample.recoveries == 0
 }
@@ -293,8 +296,9 @@ pub fn walks_on(r: &SimWalkReport) -> bool {
 }
 
 /// What ended a run that did not walk on, in a few words (`fall: off the back of the
-/// belt`, `trip: step_timeout`); `ok` if it rode through, `ok after a relaunch` (or `after n
-/// relaunches`) if it walked on after a stalled step was relaunched from double support.
+/// belt`, `trip: step_timeout`); `ok` if it rode through (`ok, n steps back` with step-back
+/// catches), `ok after a relaunch` (or `after n relaunches`) if it walked on after a stalled
+/// step was relaunched from double support.
 pub fn outcome(r: &SimWalkReport) -> String {
     match (r.summary.trip, r.fall) {
         (Some(t), _) => format!("trip: {}", t.name()),
@@ -302,10 +306,15 @@ pub fn outcome(r: &SimWalkReport) -> String {
         (None, None) if r.summary.final_state != ControlState::Walk => {
             format!("ended in {}", r.summary.final_state.name())
         }
-        (None, None) => match r.summary.last_sample.recoveries {
-            0 => "ok".into(),
-            1 => "ok after a relaunch".into(),
-            n => format!("ok after {n} relaunches"),
+        (None, None) => match (
+            r.summary.last_sample.recoveries,
+            r.summary.last_sample.catches,
+        ) {
+            (0, 0) => "ok".into(),
+            (0, 1) => "ok, 1 step back".into(),
+            (0, n) => format!("ok, {n} steps back"),
+            (1, _) => "ok after a relaunch".into(),
+            (n, _) => format!("ok after {n} relaunches"),
         },
     }
 }

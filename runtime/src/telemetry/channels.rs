@@ -56,7 +56,7 @@ pub fn channel_schemas(
     let hzd = json!({"type": "object", "properties": {
         "t_s": number(), "phase": number(), "phase_rate_per_s": number(),
         "stance": {"type": "string"}, "steps": {"type": "integer"},
-        "recoveries": {"type": "integer"},
+        "recoveries": {"type": "integer"}, "catches": {"type": "integer"},
         "swing_foot_height_m": number(),
         "y_des_rad": outputs(), "dy_des_rad_s": outputs(), "y_act_rad": outputs(),
         "y_err_rad": outputs()}});
@@ -179,6 +179,7 @@ pub fn sample_messages(
     let hzd = json!({
         "t_s": t, "phase": s.phase, "phase_rate_per_s": s.phase_rate_per_s,
         "stance": side_name(s.stance), "steps": s.steps, "recoveries": s.recoveries,
+        "catches": s.catches,
         "swing_foot_height_m": s.swing_foot_height_m,
         "y_des_rad": outputs(&s.y_des_rad), "dy_des_rad_s": outputs(&s.dy_des_rad_s),
         "y_act_rad": outputs(&s.y_act_rad),

@@ -29,6 +29,8 @@ pub struct StateSample {
     pub steps: u32,
     /// Relaunches after a stalled step ([`crate::control::Status::recoveries`]).
     pub recoveries: u32,
+    /// Step-back catches ([`crate::control::Status::catches`]).
+    pub catches: u32,
     /// Consecutive overruns.
     pub overrun_streak: u32,
     /// Total overruns.
@@ -90,6 +92,7 @@ impl Default for StateSample {
             fresh_mask: 0,
             steps: 0,
             recoveries: 0,
+            catches: 0,
             overrun_streak: 0,
             overruns: 0,
             tick_compute_ns: 0,
@@ -143,6 +146,7 @@ impl StateSample {
         self.trip_code = s.trip.map_or(0, |t| t.code());
         self.steps = s.steps;
         self.recoveries = s.recoveries;
+        self.catches = s.catches;
         self.overrun_streak = input.overrun_streak;
         self.overruns = stats.overruns;
         self.tick_compute_ns = stats.tick_compute_ns;

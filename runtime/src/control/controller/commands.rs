@@ -6,6 +6,7 @@ use super::Controller;
 use crate::control::double_support::{self, Geometry};
 use crate::control::gait_table::side_index;
 use crate::control::orbit_table::OrbitTable;
+use crate::control::recovery::CATCH_SIGMA_MARGIN;
 use crate::control::tick::{CommandMode, JointCommand};
 use crate::control::transitions::{
     Launch, LaunchTiming, LAUNCH_BEHIND_M, LAUNCH_MAX_DROP_M, LAUNCH_PASS_MARGIN,
@@ -152,6 +153,7 @@ impl Controller {
                 leg_q: *leg_q,
                 correction: [0.0; 3],
                 last_t_s: t_s,
+                catch: None,
             }
         });
     }
@@ -200,10 +202,21 @@ impl Controller {
         let Some(m) = g.measure(self.stance, pitch, pitch_rate, leg_q, leg_dq) else {
             return false;
         };
+        // A catch hands over only once it carries the torso forward.
+        if launch
+            .catch
+            .is_some_and(|c| c.at(t_s - launch.start_t_s).1 <= 0.0 || m.rate[0] <= 0.0)
+        {
+            return false;
+        }
         let sigma = g.angular_momentum(self.stance, m.pose, m.rate, leg_q, leg_dq);
         let theta = g.stance_leg_angle(self.stance, m.pose, leg_q);
         match (sigma, theta) {
-            (Some(s), Some(th)) => s >= table.sigma_at(th),
+            (Some(s), Some(th)) => {
+                // (a catch with a margin: measured, `recovery`)
+                let margin = launch.catch.map_or(1.0, |_| CATCH_SIGMA_MARGIN);
+                s >= margin * table.sigma_at(th)
+            }
             _ => false,
         }
     }
@@ -233,6 +246,11 @@ impl Controller {
                 launch.timing.duration_s,
                 dt,
             );
+        }
+        // A catch: the torso on its pendulum, lowered if the rear foot needs it.
+        if let Some(c) = launch.catch {
+            (pose[0], rate[0]) = c.at(dt);
+            (pose[1], rate[1]) = c.height(dt);
         }
         let geometry = self.geometry();
         // Pose feedback (PI): the joints' compliance lets the torso sag off its plan (4° of

@@ -491,7 +491,8 @@
 //!   (0.277 m). The neighbouring gains each miss a figure (docs/gait-library.md, "Shipped");
 //! - table (d): 5 of 5 in each case over seeds 1–10 (and 9, 9, 10 of 10 over seeds 11–20);
 //! - pushes: −20 N 0, 0, 0, 5, 0 of 5 ridden through (3, 0, 4, 0, 5 more walk on after a
-//!   relaunch), +40 N 0, 4, 5, 5, 0 with the settle cut to 3 steps ("The disturbance
+//!   relaunch; 4, 5, 4, 5, 5 since the step-back catch, `runtime::control::recovery`),
+//!   +40 N 0, 4, 5, 5, 0 with the settle cut to 3 steps ("The disturbance
 //!   settle"); largest at every point 8–10 N back, 5–10 N forward (the same with 6 mrad);
 //! - what got worse (seeds 11–20 against the config before): −20 N at 50 % stalls its step in
 //!   10 of 10 (ridden through 10 of 10 before), and seed 17's launch from Stand runs off the
