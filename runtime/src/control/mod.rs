@@ -10,7 +10,8 @@
 //! | `speed` | treadmill speed control: the gait library by speed, interpolated at impact; the step-to-step regulator and the belt-position loop |
 //! | `transitions` | ramp, launch, start blend, braking step; minimum-jerk blends |
 //! | `orbit_table` | the planned orbit's stance-leg angular momentum σ*(θ) (zero dynamics), for the launch's hand-over |
-//! | `recovery` | the stall relaunch: a Walk step stalled on both feet launches again from double support |
+//! | `recovery` | the stall relaunch: a Walk step stalled on both feet launches again from double support; the step-back catch |
+//! | `pendulum` | the step-back catch's inverted pendulum in double support |
 //! | `double_support` | kinematics with both feet down: torso pose, inverse kinematics |
 
 pub mod controller;
@@ -18,6 +19,7 @@ mod double_support;
 mod gait_table;
 mod orbit;
 mod orbit_table;
+mod pendulum;
 mod recovery;
 mod speed;
 pub mod tick;

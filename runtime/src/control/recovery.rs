@@ -140,10 +140,11 @@
 //!   behind (the knee at its 0.05 rad limit), so without lowering the torso the foot landed
 //!   short and the robot rocked back over it; carrying the torso (not only the foot) in this
 //!   phase pitched it back 0.07 rad in 80 ms (the swing leg's reaction through the stance hip).
-//! - **The catch proper** ([`Catch`], double support, a launch with [`CATCH`]): the centre of
+//! - **The catch proper** ([`Catch`](super::pendulum::Catch), double support, a launch with
+//!   [`CATCH`]): the centre of
 //!   mass on an inverted pendulum about a pivot between the feet, halfway to the rear foot or
-//!   further back so its divergent component leads it by [`CATCH_MIN_LEAD_M`] (none if that
-//!   is within [`CATCH_REAR_MARGIN_M`] of the rear foot: the walk goes on, the step timeout
+//!   further back so its divergent component leads it by 2 cm (none if that
+//!   is within 1 cm of the rear foot: the walk goes on, the step timeout
 //!   stays the last resort); from the rate measured while the foot was still clear of the
 //!   ground (the landing shakes the joint rates: −0.31 m/s measured against −0.12 before); the
 //!   pitch back to the set-down's from rest; the torso lowered if the rear leg needs it; the
@@ -208,15 +209,6 @@ pub(super) const CATCH_STEP_BACK_M: f64 = 0.17;
 pub(super) const CATCH_PRESS_M: f64 = 0.002;
 /// ... and is down once measured at most this high, m.
 pub(super) const CATCH_DOWN_M: f64 = 0.0;
-/// The catch's pivot sits this fraction of the way from the rear foot to the front foot ...
-pub(super) const CATCH_PIVOT_FRACTION: f64 = 0.5;
-/// ... or further back, so that the centre of mass's divergent component `x + v/ω` starts at
-/// least this far ahead of it, m (else the pendulum would carry it back past the pivot) ...
-pub(super) const CATCH_MIN_LEAD_M: f64 = 0.02;
-/// ... but no closer than this to the rear foot, m (else no catch).
-pub(super) const CATCH_REAR_MARGIN_M: f64 = 0.01;
-/// The torso lowers, if the rear foot needs it, over this long, s.
-pub(super) const CATCH_LOWER_S: f64 = 0.25;
 /// A catch hands over onto the orbit once the measured momentum is this many times σ*(θ)
 /// (1.0 stalled the step after the catch more often: module docs) ...
 pub(super) const CATCH_SIGMA_MARGIN: f64 = 1.3;
@@ -308,80 +300,6 @@ impl SetDown {
             ],
             self.z0_m + (self.z1_m - self.z0_m) * s,
         )
-    }
-}
-
-/// The catch proper, in double support: the centre of mass follows an inverted pendulum about
-/// a pivot between the feet, `x'' = ω²(x − p)` (the centre of pressure held at `p`), which
-/// stops its backward motion and carries it forward.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Catch {
-    /// The pivot, relative to the stance (front) foot, m.
-    pub(super) pivot_x_m: f64,
-    /// √(g/z) of the centre of mass's height at the start, 1/s.
-    pub(super) omega_per_s: f64,
-    /// The centre of mass's x and forward rate at the start, m and m/s.
-    pub(super) x0_m: f64,
-    pub(super) v0_mps: f64,
-    /// The centre of mass ahead of the torso origin, m (held from the start).
-    pub(super) com_ahead_m: f64,
-    /// The torso's height at the start and once lowered, m.
-    pub(super) z0_m: f64,
-    pub(super) z1_m: f64,
-}
-
-impl Catch {
-    /// The catch of a centre of mass at `x0_m` moving at `v0_mps`, `height_m` above the feet,
-    /// the rear foot at `rear_x_m` (the front foot at 0), `com_ahead_m` ahead of the torso
-    /// origin; the torso at `z0_m`, lowered to `z1_m`. `None` if no pivot at least
-    /// [`CATCH_REAR_MARGIN_M`] ahead of the rear foot stops it.
-    pub(super) fn new(
-        (x0_m, v0_mps): (f64, f64),
-        height_m: f64,
-        rear_x_m: f64,
-        com_ahead_m: f64,
-        (z0_m, z1_m): (f64, f64),
-    ) -> Option<Self> {
-        if !(height_m > 0.0 && rear_x_m < 0.0 && x0_m.is_finite() && v0_mps.is_finite()) {
-            return None;
-        }
-        let omega_per_s = (crate::estimator::GRAVITY_MPS2 / height_m).sqrt();
-        let divergent = x0_m + v0_mps / omega_per_s;
-        let pivot_x_m = (rear_x_m * (1.0 - CATCH_PIVOT_FRACTION)).min(divergent - CATCH_MIN_LEAD_M);
-        (pivot_x_m >= rear_x_m + CATCH_REAR_MARGIN_M).then_some(Self {
-            pivot_x_m,
-            omega_per_s,
-            x0_m,
-            v0_mps,
-            com_ahead_m,
-            z0_m,
-            z1_m,
-        })
-    }
-
-    /// The torso's x (the centre of mass's less its offset) and forward rate `t_s` into the
-    /// catch, m and m/s.
-    pub(super) fn at(&self, t_s: f64) -> (f64, f64) {
-        let w = self.omega_per_s;
-        let (s, c) = ((w * t_s).sinh(), (w * t_s).cosh());
-        let d = self.x0_m - self.pivot_x_m;
-        (
-            self.pivot_x_m + d * c + self.v0_mps / w * s - self.com_ahead_m,
-            d * w * s + self.v0_mps * c,
-        )
-    }
-
-    /// The torso's height and its rate `t_s` into the catch (lowered on a minimum-jerk ramp
-    /// over [`CATCH_LOWER_S`]), m and m/s.
-    pub(super) fn height(&self, t_s: f64) -> (f64, f64) {
-        let (s, ds_du) = super::transitions::min_jerk(t_s / CATCH_LOWER_S);
-        let dz = self.z1_m - self.z0_m;
-        let rate = if t_s < CATCH_LOWER_S {
-            dz * ds_du / CATCH_LOWER_S
-        } else {
-            0.0
-        };
-        (self.z0_m + dz * s, rate)
     }
 }
 
@@ -479,69 +397,6 @@ mod tests {
         assert!(!(1..3000).any(|k| d.check(f64::from(k) * 1e-3, 0.0, true)));
         let mut off = StallDetector::new(0.0);
         assert_eq!(run(&mut off, 5.0, |_| 0.2, |_| true), None);
-    }
-
-    /// The pendulum of a robot 0.05 m ahead of its rear foot moving back at 0.1 m/s.
-    fn moving_back() -> Catch {
-        Catch::new((-0.05, -0.1), 0.78, -0.17, -0.004, (0.69, 0.68)).unwrap()
-    }
-
-    #[test]
-    fn the_catch_starts_at_the_measured_state_and_follows_its_pendulum() {
-        let c = moving_back();
-        // At its start: the measured centre of mass less its offset, at the measured rate.
-        let (x, v) = c.at(0.0);
-        assert!((x - (-0.05 + 0.004)).abs() < 1e-12 && (v + 0.1).abs() < 1e-12);
-        // x'' = ω²(x − p) at every time (central second difference, 1e-4 s: truncation
-        // error ~ h²·ω⁴·|x|/12, far below 1e-6 m/s²); ẋ is the derivative of x.
-        let h = 1e-4;
-        for k in 0..8 {
-            let t = 0.1 * f64::from(k);
-            let x = |t: f64| c.at(t).0 + c.com_ahead_m;
-            let xdd = (x(t + h) - 2.0 * x(t) + x(t - h)) / (h * h);
-            let want = c.omega_per_s.powi(2) * (x(t) - c.pivot_x_m);
-            assert!((xdd - want).abs() < 1e-4, "t {t}: {xdd} vs {want}");
-            let xd = (x(t + h) - x(t - h)) / (2.0 * h);
-            assert!((xd - c.at(t).1).abs() < 1e-8, "t {t}");
-        }
-    }
-
-    #[test]
-    fn the_catch_stops_the_backward_motion_ahead_of_its_pivot_and_carries_the_robot_forward() {
-        let c = moving_back();
-        // The pivot halfway to the rear foot, or further back so the divergent component
-        // leads it by CATCH_MIN_LEAD_M: here −0.085 m and x + v/ω = −0.0782 m.
-        let divergent = c.x0_m + c.v0_mps / c.omega_per_s;
-        assert!(c.pivot_x_m <= -0.085 + 1e-12 && c.pivot_x_m <= divergent - CATCH_MIN_LEAD_M);
-        assert!(c.pivot_x_m >= -0.17 + CATCH_REAR_MARGIN_M);
-        // The rate crosses zero once, with the centre of mass still ahead of the pivot, and
-        // grows forward after.
-        let samples: Vec<(f64, f64)> = (0..=800).map(|k| c.at(f64::from(k) * 1e-3)).collect();
-        let turn = samples.iter().position(|&(_, v)| v > 0.0).unwrap();
-        assert!(turn > 0 && samples[turn..].windows(2).all(|w| w[1].1 > w[0].1));
-        let lowest = samples
-            .iter()
-            .map(|&(x, _)| x + c.com_ahead_m)
-            .fold(f64::MAX, f64::min);
-        assert!(lowest > c.pivot_x_m, "{lowest} vs {}", c.pivot_x_m);
-        assert!(samples[800].1 > 0.2, "{:?}", samples[800]);
-        // The torso lowers from z0 to z1 on a minimum-jerk ramp and stays.
-        assert_eq!(c.height(0.0), (0.69, 0.0));
-        assert!((c.height(CATCH_LOWER_S).0 - 0.68).abs() < 1e-12);
-        assert_eq!(c.height(1.0), (0.68, 0.0));
-    }
-
-    #[test]
-    fn no_catch_when_no_pivot_ahead_of_the_rear_foot_stops_the_robot() {
-        // 0.05 m ahead of the rear foot, the pivot at most 0.04 m behind the centre of mass
-        // (CATCH_REAR_MARGIN_M), which its divergent component must lead by
-        // CATCH_MIN_LEAD_M: caught if moving back slower than (0.04 − 0.02)·ω ≈ 0.071 m/s
-        // (ω = √(g/0.78 m) ≈ 3.55/s).
-        assert!(Catch::new((-0.12, -0.065), 0.78, -0.17, 0.0, (0.7, 0.7)).is_some());
-        assert!(Catch::new((-0.12, -0.075), 0.78, -0.17, 0.0, (0.7, 0.7)).is_none());
-        // Nonsense in, no catch out.
-        assert!(Catch::new((-0.05, f64::NAN), 0.78, -0.17, 0.0, (0.7, 0.7)).is_none());
-        assert!(Catch::new((-0.05, -0.1), 0.78, 0.1, 0.0, (0.7, 0.7)).is_none());
     }
 
     #[test]

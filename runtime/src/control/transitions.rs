@@ -169,7 +169,7 @@ pub(super) struct Launch {
     pub(super) correction: TorsoPose,
     pub(super) last_t_s: f64,
     /// A step-back catch: the torso's x follows its pendulum instead of the quintic.
-    pub(super) catch: Option<super::recovery::Catch>,
+    pub(super) catch: Option<super::pendulum::Catch>,
 }
 
 /// After a launch, the first step's outputs start from the launch's end pose and blend into

@@ -6,9 +6,9 @@ use super::walk::WalkEval;
 use super::Controller;
 use crate::control::double_support::slots;
 use crate::control::gait_table::side_index;
+use crate::control::pendulum::{Catch, CATCH_LOWER_S};
 use crate::control::recovery::{
-    Catch, FallingBack, SetDown, CATCH, CATCH_DOWN_M, CATCH_LOWER_S, CATCH_SET_DOWN_S,
-    CATCH_STEP_BACK_M,
+    FallingBack, SetDown, CATCH, CATCH_DOWN_M, CATCH_SET_DOWN_S, CATCH_STEP_BACK_M,
 };
 use crate::control::tick::ControlState;
 use crate::control::transitions::LAUNCH_REACH_FRACTION;
