@@ -28,6 +28,17 @@ fn counted<R>(f: impl FnOnce() -> R) -> (R, usize) {
     (r, counting_alloc::stop())
 }
 
+/// A still IMU pitched `pitch_rad` at `t_s`: gravity alone, the gyro reading `bias_rad_s` plus
+/// the backends' dither.
+fn still_imu(t_s: f64, pitch_rad: f64, bias_rad_s: f64) -> ImuSample {
+    ImuSample {
+        t_s,
+        gyro_pitch_rad_s: bias_rad_s + runtime::backend::test_dither_rad_s(t_s),
+        accel_x_mps2: -GRAVITY_MPS2 * pitch_rad.sin(),
+        accel_z_mps2: GRAVITY_MPS2 * pitch_rad.cos(),
+    }
+}
+
 /// The test gait library (`tests/fixtures/library/`), sorted by speed.
 fn library(setup: Setup) -> Setup {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/library");
@@ -77,12 +88,7 @@ fn walk_without_allocating_with(phase: PhaseSource, with_library: bool) {
                 }
             }
             input.t_s = f64::from(k) * 1e-3;
-            input.imu = Some(ImuSample {
-                t_s: input.t_s,
-                gyro_pitch_rad_s: 0.001 + runtime::backend::test_dither_rad_s(input.t_s),
-                accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
-                accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
-            });
+            input.imu = Some(still_imu(input.t_s, pitch, 0.001));
             input.operator = match k {
                 1 => Some(OperatorCommand::Start),
                 2 if with_library => Some(OperatorCommand::Belt { speed_mps: 0.3 }),
@@ -252,12 +258,7 @@ fn the_stall_relaunch_allocates_nothing() {
     let ((), allocations) = counted(|| {
         for k in 1..2000u32 {
             input.t_s = f64::from(k) * 1e-3;
-            input.imu = Some(ImuSample {
-                t_s: input.t_s,
-                gyro_pitch_rad_s: runtime::backend::test_dither_rad_s(input.t_s),
-                accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
-                accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
-            });
+            input.imu = Some(still_imu(input.t_s, pitch, 0.0));
             c.tick(&input, &mut out);
         }
     });
@@ -353,12 +354,7 @@ fn the_step_back_catch_allocates_nothing() {
             for (i, &slot) in slots.iter().enumerate() {
                 (input.motors[slot].q_rad, input.motors[slot].dq_rad_s) = (y[i], dy[i]);
             }
-            input.imu = Some(ImuSample {
-                t_s: input.t_s,
-                gyro_pitch_rad_s: runtime::backend::test_dither_rad_s(input.t_s),
-                accel_x_mps2: -GRAVITY_MPS2 * pitch.sin(),
-                accel_z_mps2: GRAVITY_MPS2 * pitch.cos(),
-            });
+            input.imu = Some(still_imu(input.t_s, pitch, 0.0));
             c.tick(&input, &mut out);
         }
     });
