@@ -174,17 +174,23 @@ fn a_backward_push_that_runs_a_step_back_is_caught_at_once_and_rides_through() {
     assert!(rides_through(&on), "{on}");
     assert!(on.summary.last_sample.catches >= 1, "{on}");
     assert_eq!(on.summary.last_sample.recoveries, 0, "{on}");
-    let gap = on
-        .step_records
-        .windows(2)
-        .map(|w| w[1].t_s - w[0].t_s)
-        .fold(0.0_f64, f64::max);
-    println!("longest time between touchdowns {gap:.3} s");
-    // The same run without the catch stalls (the next test's relaunch, or its step timeout).
+    // The same run without the catch stalls and relaunches (the relaunch waits 1 s at rest).
     let mut off = setup.clone();
     off.config.speed.step_back_catch_m = 0.0;
     let off = walk(&off, &options).expect("walk");
     assert!(!rides_through(&off), "{off}");
+    assert_eq!(off.summary.last_sample.recoveries, 1, "{off}");
+    // The catch walks on at once: its longest time between touchdowns is at least half a second
+    // shorter than the relaunch's (measured 0.992 s against 1.897 s; the relaunch's 1 s wait
+    // makes the difference).
+    let longest_gap_s = |r: &runtime::sim::run::SimWalkReport| {
+        r.step_records
+            .windows(2)
+            .map(|w| w[1].t_s - w[0].t_s)
+            .fold(0.0_f64, f64::max)
+    };
+    let (gap_on, gap_off) = (longest_gap_s(&on), longest_gap_s(&off));
+    assert!(gap_on + 0.5 < gap_off, "{gap_on:.3} s vs {gap_off:.3} s");
 }
 
 /// The stall relaunch end to end, the step-back catch off (`runtime::control::recovery`; issue

@@ -226,13 +226,12 @@ fn logging_the_ticks_can_frames_allocates_nothing() {
     let _ = std::fs::remove_file(&path);
 }
 
-/// The stall relaunch (`speed.stall_relaunch_s`) allocates nothing either: a walk held rigidly in
-/// the gait's post-impact pose (both feet down, no progress) relaunches from double support
-/// inside the counted ticks, then hands over to the step.
-#[test]
-fn the_stall_relaunch_allocates_nothing() {
+/// The shipped setup with its speed settings changed by `speed` and the safety's stall timeout
+/// off (the recovery tests hold the robot still for longer than it allows), and its gait's
+/// initial coordinates.
+fn no_stall_timeout(speed: impl FnOnce(&mut runtime::config::SpeedConfig)) -> (Setup, Vec<f64>) {
     let mut setup = Setup::shipped().expect("shipped setup");
-    setup.config.speed.stall_relaunch_s = 0.3;
+    speed(&mut setup.config.speed);
     setup.config.safety.stall_timeout_s = 1e9;
     let q0 = setup
         .gait
@@ -240,6 +239,15 @@ fn the_stall_relaunch_allocates_nothing() {
         .clone()
         .expect("an initial state")
         .q;
+    (setup, q0)
+}
+
+/// The stall relaunch (`speed.stall_relaunch_s`) allocates nothing either: a walk held rigidly in
+/// the gait's post-impact pose (both feet down, no progress) relaunches from double support
+/// inside the counted ticks, then hands over to the step.
+#[test]
+fn the_stall_relaunch_allocates_nothing() {
+    let (setup, q0) = no_stall_timeout(|speed| speed.stall_relaunch_s = 0.3);
     let pitch = q0[2];
     let held: Vec<f64> = runtime::config::LEG_JOINT_NAMES
         .iter()
@@ -274,16 +282,10 @@ fn the_stall_relaunch_allocates_nothing() {
 /// double support and hands over, all inside the counted ticks.
 #[test]
 fn the_step_back_catch_allocates_nothing() {
-    let mut setup = Setup::shipped().expect("shipped setup");
-    setup.config.speed.step_back_catch_m = 0.05;
-    setup.config.speed.stall_relaunch_s = 0.0;
-    setup.config.safety.stall_timeout_s = 1e9;
-    let q0 = setup
-        .gait
-        .initial_state
-        .clone()
-        .expect("an initial state")
-        .q;
+    let (setup, q0) = no_stall_timeout(|speed| {
+        speed.step_back_catch_m = 0.05;
+        speed.stall_relaunch_s = 0.0;
+    });
     let pitch = q0[2];
     // The leg slot of each output, for the stance side whose outputs at τ = 0 are the initial
     // state's joints.

@@ -19,7 +19,7 @@ pub(super) const CATCH_LOWER_S: f64 = 0.25;
 /// a pivot between the feet, `x'' = ω²(x − p)` (the centre of pressure held at `p`), which
 /// stops its backward motion and carries it forward.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct Catch {
+pub(super) struct Pendulum {
     /// The pivot, relative to the stance (front) foot, m.
     pub(super) pivot_x_m: f64,
     /// √(g/z) of the centre of mass's height at the start, 1/s.
@@ -29,22 +29,18 @@ pub(super) struct Catch {
     pub(super) v0_mps: f64,
     /// The centre of mass ahead of the torso origin, m (held from the start).
     pub(super) com_ahead_m: f64,
-    /// The torso's height at the start and once lowered, m.
-    pub(super) z0_m: f64,
-    pub(super) z1_m: f64,
 }
 
-impl Catch {
-    /// The catch of a centre of mass at `x0_m` moving at `v0_mps`, `height_m` above the feet,
-    /// the rear foot at `rear_x_m` (the front foot at 0), `com_ahead_m` ahead of the torso
-    /// origin; the torso at `z0_m`, lowered to `z1_m`. `None` if no pivot at least
-    /// [`CATCH_REAR_MARGIN_M`] ahead of the rear foot stops it.
+impl Pendulum {
+    /// The pendulum of a centre of mass at `x0_m` moving at `v0_mps`, `height_m` above the
+    /// feet, the rear foot at `rear_x_m` (the front foot at 0), `com_ahead_m` ahead of the
+    /// torso origin. `None` if no pivot at least [`CATCH_REAR_MARGIN_M`] ahead of the rear
+    /// foot stops it.
     pub(super) fn new(
         (x0_m, v0_mps): (f64, f64),
         height_m: f64,
         rear_x_m: f64,
         com_ahead_m: f64,
-        (z0_m, z1_m): (f64, f64),
     ) -> Option<Self> {
         if !(height_m > 0.0 && rear_x_m < 0.0 && x0_m.is_finite() && v0_mps.is_finite()) {
             return None;
@@ -58,8 +54,6 @@ impl Catch {
             x0_m,
             v0_mps,
             com_ahead_m,
-            z0_m,
-            z1_m,
         })
     }
 
@@ -74,9 +68,26 @@ impl Catch {
             d * w * s + self.v0_mps * c,
         )
     }
+}
 
-    /// The torso's height and its rate `t_s` into the catch (lowered on a minimum-jerk ramp
-    /// over [`CATCH_LOWER_S`]), m and m/s.
+/// The torso's motion in the catch proper: its x on the [`Pendulum`], its height lowered (if
+/// the rear foot needs it) from `z0_m` to `z1_m` on a minimum-jerk ramp over
+/// [`CATCH_LOWER_S`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Catch {
+    pub(super) pendulum: Pendulum,
+    /// The torso's height at the start and once lowered, m.
+    pub(super) z0_m: f64,
+    pub(super) z1_m: f64,
+}
+
+impl Catch {
+    /// The torso's x and forward rate `t_s` into the catch, m and m/s.
+    pub(super) fn at(&self, t_s: f64) -> (f64, f64) {
+        self.pendulum.at(t_s)
+    }
+
+    /// The torso's height and its rate `t_s` into the catch, m and m/s.
     pub(super) fn height(&self, t_s: f64) -> (f64, f64) {
         quintic(self.z0_m, 0.0, self.z1_m, 0.0, CATCH_LOWER_S, t_s)
     }
@@ -89,7 +100,11 @@ mod tests {
 
     /// The pendulum of a robot 0.05 m ahead of its rear foot moving back at 0.1 m/s.
     fn moving_back() -> Catch {
-        Catch::new((-0.05, -0.1), 0.78, -0.17, -0.004, (0.69, 0.68)).unwrap()
+        Catch {
+            pendulum: Pendulum::new((-0.05, -0.1), 0.78, -0.17, -0.004).unwrap(),
+            z0_m: 0.69,
+            z1_m: 0.68,
+        }
     }
 
     #[test]
@@ -103,9 +118,9 @@ mod tests {
         let h = 1e-4;
         for k in 0..8 {
             let t = 0.1 * f64::from(k);
-            let x = |t: f64| c.at(t).0 + c.com_ahead_m;
+            let x = |t: f64| c.at(t).0 + c.pendulum.com_ahead_m;
             let xdd = (x(t + h) - 2.0 * x(t) + x(t - h)) / (h * h);
-            let want = c.omega_per_s.powi(2) * (x(t) - c.pivot_x_m);
+            let want = c.pendulum.omega_per_s.powi(2) * (x(t) - c.pendulum.pivot_x_m);
             assert!((xdd - want).abs() < 1e-4, "t {t}: {xdd} vs {want}");
             let xd = (x(t + h) - x(t - h)) / (2.0 * h);
             assert!((xd - c.at(t).1).abs() < 1e-8, "t {t}");
@@ -117,9 +132,12 @@ mod tests {
         let c = moving_back();
         // The pivot halfway to the rear foot, or further back so the divergent component
         // leads it by CATCH_MIN_LEAD_M: here −0.085 m and x + v/ω = −0.0782 m.
-        let divergent = c.x0_m + c.v0_mps / c.omega_per_s;
-        assert!(c.pivot_x_m <= -0.085 + 1e-12 && c.pivot_x_m <= divergent - CATCH_MIN_LEAD_M);
-        assert!(c.pivot_x_m >= -0.17 + CATCH_REAR_MARGIN_M);
+        let divergent = c.pendulum.x0_m + c.pendulum.v0_mps / c.pendulum.omega_per_s;
+        assert!(
+            c.pendulum.pivot_x_m <= -0.085 + 1e-12
+                && c.pendulum.pivot_x_m <= divergent - CATCH_MIN_LEAD_M
+        );
+        assert!(c.pendulum.pivot_x_m >= -0.17 + CATCH_REAR_MARGIN_M);
         // The rate crosses zero once, with the centre of mass still ahead of the pivot, and
         // grows forward after.
         let samples: Vec<(f64, f64)> = (0..=800).map(|k| c.at(f64::from(k) * 1e-3)).collect();
@@ -127,9 +145,13 @@ mod tests {
         assert!(turn > 0 && samples[turn..].windows(2).all(|w| w[1].1 > w[0].1));
         let lowest = samples
             .iter()
-            .map(|&(x, _)| x + c.com_ahead_m)
+            .map(|&(x, _)| x + c.pendulum.com_ahead_m)
             .fold(f64::MAX, f64::min);
-        assert!(lowest > c.pivot_x_m, "{lowest} vs {}", c.pivot_x_m);
+        assert!(
+            lowest > c.pendulum.pivot_x_m,
+            "{lowest} vs {}",
+            c.pendulum.pivot_x_m
+        );
         assert!(samples[800].1 > 0.2, "{:?}", samples[800]);
         // The torso lowers from z0 to z1 on a minimum-jerk ramp and stays.
         assert_eq!(c.height(0.0), (0.69, 0.0));
@@ -143,10 +165,10 @@ mod tests {
         // (CATCH_REAR_MARGIN_M), which its divergent component must lead by
         // CATCH_MIN_LEAD_M: caught if moving back slower than (0.04 − 0.02)·ω ≈ 0.071 m/s
         // (ω = √(g/0.78 m) ≈ 3.55/s).
-        assert!(Catch::new((-0.12, -0.065), 0.78, -0.17, 0.0, (0.7, 0.7)).is_some());
-        assert!(Catch::new((-0.12, -0.075), 0.78, -0.17, 0.0, (0.7, 0.7)).is_none());
+        assert!(Pendulum::new((-0.12, -0.065), 0.78, -0.17, 0.0).is_some());
+        assert!(Pendulum::new((-0.12, -0.075), 0.78, -0.17, 0.0).is_none());
         // Nonsense in, no catch out.
-        assert!(Catch::new((-0.05, f64::NAN), 0.78, -0.17, 0.0, (0.7, 0.7)).is_none());
-        assert!(Catch::new((-0.05, -0.1), 0.78, 0.1, 0.0, (0.7, 0.7)).is_none());
+        assert!(Pendulum::new((-0.05, f64::NAN), 0.78, -0.17, 0.0).is_none());
+        assert!(Pendulum::new((-0.05, -0.1), 0.78, 0.1, 0.0).is_none());
     }
 }

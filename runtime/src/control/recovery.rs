@@ -147,8 +147,10 @@
 //!   is within 1 cm of the rear foot: the walk goes on, the step timeout
 //!   stays the last resort); from the rate measured while the foot was still clear of the
 //!   ground (the landing shakes the joint rates: −0.31 m/s measured against −0.12 before); the
-//!   pitch back to the set-down's from rest; the torso lowered if the rear leg needs it; the
-//!   phase observer restarted. It hands over onto the orbit as a launch does, once the torso
+//!   pitch back to the set-down's from rest; the torso lowered if the rear leg needs it (the
+//!   same inverse-kinematics search as the set-down's, for where the pendulum has the torso
+//!   once lowered; the launch's reach from the torso origin kept it at its height where the
+//!   legs did not reach); the phase observer restarted. It hands over onto the orbit as a launch does, once the torso
 //!   moves forward and the measured momentum about the stance foot is [`CATCH_SIGMA_MARGIN`]
 //!   times σ*(θ) (at most [`CATCH_MAX_S`]); the step after it may stall or run back again and
 //!   be caught or relaunched like any other.
@@ -156,8 +158,8 @@
 //! Counted apart: `catches` on `/hzd`, in the run's report and in `adam bench treadmill`'s
 //! outcomes ("ok, 1 step back"). A caught run rides through
 //! (`runtime::sim::scenarios::rides_through`): it never stood still (seed 1, −20 N at 90 %:
-//! one catch, the longest time between touchdowns 0.992 s against 0.68 s for a gait step;
-//! `runtime/tests/push_sim.rs`).
+//! one catch, the longest time between touchdowns 0.992 s against 0.68 s for a gait step and
+//! 1.897 s for the stall relaunch; `runtime/tests/push_sim.rs`).
 //!
 //! Measured (`adam bench treadmill --config configs/runtime/adam_treadmill.toml`, seeds 1–5,
 //! 49.0 s wall): −20 N rides through 4, 5, 4, 5, 5 of 5 at 10/30/50/70/90 % (18 of the 23 after

@@ -155,8 +155,9 @@ pub(super) struct Launch {
     pub(super) from: TorsoPose,
     /// The torso's rate at the start (zero from Stand: at rest), m/s, m/s, rad/s.
     pub(super) from_rate: TorsoPose,
+    /// The quintic's end pose (a catch: only its pitch; x and height follow the catch).
     pub(super) to: TorsoPose,
-    /// Forward torso speed at the launch's end, m/s.
+    /// Forward torso speed at the launch's end, m/s (a catch: unused, 0).
     pub(super) speed_mps: f64,
     /// The planned orbit's σ*(θ) of the gait walked (`None`: the launch runs its whole time).
     pub(super) orbit: Option<OrbitTable>,

@@ -4,15 +4,17 @@
 
 use super::walk::WalkEval;
 use super::Controller;
-use crate::control::double_support::slots;
+use crate::control::double_support::{slots, Geometry};
 use crate::control::gait_table::side_index;
-use crate::control::pendulum::{Catch, CATCH_LOWER_S};
+use crate::control::orbit_table::OrbitTable;
+use crate::control::pendulum::{Catch, Pendulum, CATCH_LOWER_S};
 use crate::control::recovery::{
     FallingBack, SetDown, CATCH, CATCH_DOWN_M, CATCH_SET_DOWN_S, CATCH_STEP_BACK_M,
 };
 use crate::control::tick::ControlState;
-use crate::control::transitions::LAUNCH_REACH_FRACTION;
+use crate::control::transitions::Launch;
 use crate::slots::{LEG_SLOTS, OUTPUTS};
+use model::Side;
 
 /// The set-down lowers the torso by at most this, m ...
 const CATCH_MAX_DROP_M: f64 = 0.08;
@@ -53,14 +55,8 @@ impl Controller {
         // The torso where it will be when the foot lands (it keeps moving back), as high as the
         // legs reach the landing point from.
         let x1 = m.pose[0] + m.rate[0].min(0.0) * CATCH_SET_DOWN_S;
-        let knee = slots(self.stance.other())[1];
-        let z1_m = (0..=CATCH_DROP_STEPS)
-            .map(|k| m.pose[1] - CATCH_MAX_DROP_M * f64::from(k) / f64::from(CATCH_DROP_STEPS))
-            .find(|&z| {
-                g.solve(self.stance, [x1, z, pitch], [0.0; 3], [to_x_m, 0.0], leg_q)
-                    .is_some_and(|(q, _)| q[knee].abs() >= CATCH_MIN_KNEE_RAD)
-            });
-        let Some(z1_m) = z1_m else {
+        let Some(z1_m) = reaching_height(&g, self.stance, [x1, m.pose[1], pitch], to_x_m, leg_q)
+        else {
             return;
         };
         self.set_down = Some(SetDown {
@@ -147,30 +143,71 @@ impl Controller {
             return false;
         };
         let rear_x_m = m.other_foot_xz_m[0];
-        let x0 = m.pose[0] + com[0];
         // A catch never starts forward: it stops a robot moving back.
         let v0 = sd.v_air_mps.min(0.0);
-        let reach = LAUNCH_REACH_FRACTION * self.leg_reach_m;
-        let Some(probe) = Catch::new((x0, v0), m.pose[1] + com[1], rear_x_m, com[0], (0.0, 0.0))
-        else {
+        let Some(pendulum) = Pendulum::new(
+            (m.pose[0] + com[0], v0),
+            m.pose[1] + com[1],
+            rear_x_m,
+            com[0],
+        ) else {
             return false;
         };
-        let dx = probe.at(CATCH_LOWER_S).0 - rear_x_m;
-        let z1 = m.pose[1].min((reach * reach - dx * dx).max(0.0).sqrt());
-        let c = Catch {
+        // Lowered, if the rear foot needs it, where the torso is once the lowering ends.
+        let end = [pendulum.at(CATCH_LOWER_S).0, m.pose[1], sd.pitch_rad];
+        let Some(z1_m) = reaching_height(&g, self.stance, end, rear_x_m, leg_q) else {
+            return false;
+        };
+        let catch = Catch {
+            pendulum,
             z0_m: m.pose[1],
-            z1_m: z1,
-            ..probe
+            z1_m,
         };
-        self.begin_launch(t_s, CATCH, leg_q, leg_dq);
-        let Some(launch) = self.launch.as_mut() else {
-            return false;
-        };
-        launch.catch = Some(c);
-        launch.other_foot_xz_m = [rear_x_m, 0.0];
-        launch.to[2] = sd.pitch_rad;
-        launch.from_rate[2] = 0.0;
+        let orbit = OrbitTable::of(&g, &self.gait);
+        // The pitch goes back to the set-down's from rest on the launch's quintic; its x and
+        // height follow the catch (`launch_commands`).
+        self.launch = Some(Launch {
+            start_t_s: t_s,
+            timing: CATCH,
+            from: m.pose,
+            from_rate: [m.rate[0], m.rate[1], 0.0],
+            to: [end[0], z1_m, sd.pitch_rad],
+            speed_mps: 0.0,
+            orbit,
+            other_foot_xz_m: [rear_x_m, 0.0],
+            leg_q: *leg_q,
+            correction: [0.0; 3],
+            last_t_s: t_s,
+            catch: Some(catch),
+        });
         self.phase_hat = None;
         true
     }
+}
+
+/// The highest torso, from `pose`'s height down by at most [`CATCH_MAX_DROP_M`] (x and pitch
+/// held), whose legs reach the rear foot at `rear_x_m` on the ground with its knee bent at
+/// least [`CATCH_MIN_KNEE_RAD`], by inverse kinematics; `None` if none does. (The reach from
+/// the torso origin, the launch's estimate, kept the torso at its height where the legs did
+/// not reach.) At most `CATCH_DROP_STEPS + 1` Newton solves, allocation-free.
+fn reaching_height(
+    g: &Geometry<'_>,
+    stance: Side,
+    pose: [f64; 3],
+    rear_x_m: f64,
+    warm: &[f64; LEG_SLOTS],
+) -> Option<f64> {
+    let knee = slots(stance.other())[1];
+    (0..=CATCH_DROP_STEPS)
+        .map(|k| pose[1] - CATCH_MAX_DROP_M * f64::from(k) / f64::from(CATCH_DROP_STEPS))
+        .find(|&z| {
+            g.solve(
+                stance,
+                [pose[0], z, pose[2]],
+                [0.0; 3],
+                [rear_x_m, 0.0],
+                warm,
+            )
+            .is_some_and(|(q, _)| q[knee].abs() >= CATCH_MIN_KNEE_RAD)
+        })
 }

@@ -237,7 +237,16 @@ impl Controller {
         let mut pose = [0.0; 3];
         let mut rate = [0.0; 3];
         let end_rate = [launch.speed_mps, 0.0, 0.0];
-        for k in 0..3 {
+        // A catch: the torso on its pendulum, lowered if the rear foot needs it; only its
+        // pitch on the quintic.
+        let quintic_from = if let Some(c) = launch.catch {
+            (pose[0], rate[0]) = c.at(dt);
+            (pose[1], rate[1]) = c.height(dt);
+            2
+        } else {
+            0
+        };
+        for k in quintic_from..3 {
             (pose[k], rate[k]) = double_support::quintic(
                 launch.from[k],
                 launch.from_rate[k],
@@ -246,11 +255,6 @@ impl Controller {
                 launch.timing.duration_s,
                 dt,
             );
-        }
-        // A catch: the torso on its pendulum, lowered if the rear foot needs it.
-        if let Some(c) = launch.catch {
-            (pose[0], rate[0]) = c.at(dt);
-            (pose[1], rate[1]) = c.height(dt);
         }
         let geometry = self.geometry();
         // Pose feedback (PI): the joints' compliance lets the torso sag off its plan (4° of
