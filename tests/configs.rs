@@ -96,14 +96,15 @@ fn every_config_file_loads_and_validates() {
 }
 
 /// `configs/runtime/adam_treadmill.toml` is `adam.toml` with speed control on: every section but
-/// `[speed]` is the same but for the reference lead and the unbiased touchdown pitch, so the two
-/// cannot drift apart.
+/// `[speed]` is the same but for the reference lead, the unbiased touchdown pitch and the
+/// touchdown gate, so the two cannot drift apart.
 #[test]
 fn the_treadmill_config_is_the_shipped_config_but_for_its_speed_section() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/runtime");
     // Besides [speed], the treadmill config's own values: the 2.5 ms reference lead and the
-    // unbiased touchdown pitch its walked-speed calibration was measured with.
-    let own: [(&str, &str, toml::Value); 3] = [
+    // unbiased touchdown pitch its walked-speed calibration was measured with, and the touchdown
+    // gate its pushes ride through with (`runtime::estimator`, "The touchdown gate").
+    let own: [(&str, &str, toml::Value); 4] = [
         ("walk", "reference_lead_s", toml::Value::Float(0.0025)),
         ("estimator", "encoder_lag_samples", toml::Value::Integer(1)),
         (
@@ -111,6 +112,7 @@ fn the_treadmill_config_is_the_shipped_config_but_for_its_speed_section() {
             "touchdown_after_impact",
             toml::Value::Boolean(true),
         ),
+        ("estimator", "touchdown_gate_rad", toml::Value::Float(0.01)),
     ];
     let read = |name: &str| -> toml::Table {
         let text = std::fs::read_to_string(dir.join(name)).expect(name);

@@ -235,6 +235,12 @@ pub struct EstimatorConfig {
     /// absent.
     #[serde(default)]
     pub touchdown_after_impact: bool,
+    /// A touchdown's legs' pitch further than this from the estimate is set aside, rad (0, the
+    /// default: every one is used): a foot still in the air at a fast impact makes the pitch
+    /// that levels the feet wrong. After `estimator::MAX_SET_ASIDE` set aside in a row the next
+    /// is used whatever it says (`runtime::estimator`, "The touchdown gate").
+    #[serde(default)]
+    pub touchdown_gate_rad: f64,
 }
 
 fn default_max_implausible_imu_samples() -> u32 {
@@ -739,6 +745,7 @@ impl RuntimeConfig {
             "estimator.touchdown_pitch_sigma_rad",
             e.touchdown_pitch_sigma_rad,
         )?;
+        non_negative("estimator.touchdown_gate_rad", e.touchdown_gate_rad)?;
         if e.encoder_lag_samples > MAX_ENCODER_LAG_SAMPLES {
             return Err(bad(
                 "estimator.encoder_lag_samples",

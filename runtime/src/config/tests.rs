@@ -143,6 +143,18 @@ fn errors_name_field_and_value() {
         e.contains("estimator.encoder_lag_samples") && e.contains('4'),
         "{e}"
     );
+    // The touchdown gate: a distance, never negative.
+    let text = shipped().replace(
+        "touchdown_pitch_sigma_rad = 0.01",
+        "touchdown_pitch_sigma_rad = 0.01\ntouchdown_gate_rad = -0.01",
+    );
+    let e = RuntimeConfig::from_toml(&text, "x.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("estimator.touchdown_gate_rad") && e.contains("-0.01"),
+        "{e}"
+    );
     let text = shipped().replace("[telemetry]", "[telemetry]\nbogus = 1");
     let e = RuntimeConfig::from_toml(&text, "x.toml")
         .unwrap_err()

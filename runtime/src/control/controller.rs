@@ -135,6 +135,8 @@ pub struct Controller {
     /// IMU samples the encoders' sample lags (`estimator.encoder_lag_samples`).
     encoder_lag_samples: usize,
     touchdown_after_impact: bool,
+    /// `estimator.touchdown_gate_rad`.
+    touchdown_gate_rad: f64,
     /// The impact's tick measured the legs' pitch: measure it again at the next tick.
     pitch_after_impact_due: bool,
     /// `speed.step_length_after_impact`; and the length measured at the impact's tick, to be
@@ -321,6 +323,7 @@ impl Controller {
             touchdown_pitch_sigma_rad: config.estimator.touchdown_pitch_sigma_rad,
             encoder_lag_samples: config.estimator.encoder_lag_samples as usize,
             touchdown_after_impact: config.estimator.touchdown_after_impact,
+            touchdown_gate_rad: config.estimator.touchdown_gate_rad,
             pitch_after_impact_due: false,
             step_length_after_impact: config.speed.step_length_after_impact,
             step_length_due_m: None,
@@ -571,7 +574,7 @@ impl Controller {
         // comes from the Stand on the moving belt, whose ramp rocks the robot.
         if self.state == ControlState::Stand && self.stand_hold.is_none() && self.regulator.active()
         {
-            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad, 0);
+            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad, 0, false);
         }
         // The tick after an impact: the legs' pitch again, the new stance foot down, the old
         // one just lifting (its error has the other sign of the impact tick's).
@@ -582,6 +585,7 @@ impl Controller {
                 &leg_q,
                 self.touchdown_pitch_sigma_rad * SQRT_2,
                 self.encoder_lag_samples,
+                true,
             );
         }
         // The tick after an impact: the step's length again, both feet down.
@@ -737,6 +741,7 @@ impl Controller {
                             &leg_q,
                             self.touchdown_pitch_sigma_rad * twice,
                             self.encoder_lag_samples,
+                            true,
                         );
                         self.pitch_after_impact_due = self.touchdown_after_impact;
                     }
