@@ -210,12 +210,12 @@ impl PitchEstimator {
     /// correction moves the estimate now (a lag of a few milliseconds: the covariance of the
     /// latest sample stands in for that of the older one).
     pub fn measure_pitch_lagged(&mut self, pitch_rad: f64, sigma_rad: f64, lag_samples: usize) {
-        if !self.initialized || !pitch_rad.is_finite() || !sigma_rad.is_finite() || sigma_rad <= 0.0
-        {
+        let Some(innovation) = self.innovation(pitch_rad, lag_samples) else {
+            return;
+        };
+        if !sigma_rad.is_finite() || sigma_rad <= 0.0 {
             return;
         }
-        let then_rad = self.history_rad[lag_samples.min(MAX_MEASUREMENT_LAG_SAMPLES)];
-        let innovation = wrap_pi(pitch_rad - then_rad);
         let r = sigma_rad * sigma_rad;
         // Outlier gate: a measurement more than 4σ of the innovation away is rejected.
         if innovation * innovation > 16.0 * (self.p[0][0] + r) {
@@ -237,12 +237,11 @@ impl PitchEstimator {
         lag_samples: usize,
         gate_rad: f64,
     ) -> bool {
-        if !self.initialized || !pitch_rad.is_finite() {
+        let Some(innovation) = self.innovation(pitch_rad, lag_samples) else {
             return false;
-        }
-        let then_rad = self.history_rad[lag_samples.min(MAX_MEASUREMENT_LAG_SAMPLES)];
+        };
         if gate_rad > 0.0 {
-            if wrap_pi(pitch_rad - then_rad).abs() > gate_rad && self.set_aside < MAX_SET_ASIDE {
+            if innovation.abs() > gate_rad && self.set_aside < MAX_SET_ASIDE {
                 self.set_aside += 1;
                 return false;
             }
@@ -250,6 +249,14 @@ impl PitchEstimator {
         }
         self.measure_pitch_lagged(pitch_rad, sigma_rad, lag_samples);
         true
+    }
+
+    /// A pitch measurement's innovation against the estimate `lag_samples` IMU samples back;
+    /// `None` before the first sample or for a non-finite pitch.
+    fn innovation(&self, pitch_rad: f64, lag_samples: usize) -> Option<f64> {
+        (self.initialized && pitch_rad.is_finite()).then(|| {
+            wrap_pi(pitch_rad - self.history_rad[lag_samples.min(MAX_MEASUREMENT_LAG_SAMPLES)])
+        })
     }
 
     fn correct(&mut self, innovation: f64, r: f64) {

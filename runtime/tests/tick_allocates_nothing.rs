@@ -61,6 +61,8 @@ fn walk_without_allocating_with(phase: PhaseSource, with_library: bool) {
         setup = library(setup);
     }
     setup.config.walk.phase = phase;
+    // The touchdown gate (the treadmill config's; off as shipped) runs at every impact.
+    setup.config.estimator.touchdown_gate_rad = 0.01;
     // The orbit lever (off as shipped) runs in the tick too.
     setup.config.orbit.enabled = true;
     // No robot here: with the state-based phase the step never ends; the stall check

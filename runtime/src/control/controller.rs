@@ -574,7 +574,7 @@ impl Controller {
         // comes from the Stand on the moving belt, whose ramp rocks the robot.
         if self.state == ControlState::Stand && self.stand_hold.is_none() && self.regulator.active()
         {
-            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad, 0, false);
+            self.measure_legs_pitch(&leg_q, self.touchdown_pitch_sigma_rad, 0, 0.0);
         }
         // The tick after an impact: the legs' pitch again, the new stance foot down, the old
         // one just lifting (its error has the other sign of the impact tick's).
@@ -585,7 +585,7 @@ impl Controller {
                 &leg_q,
                 self.touchdown_pitch_sigma_rad * SQRT_2,
                 self.encoder_lag_samples,
-                true,
+                self.touchdown_gate_rad,
             );
         }
         // The tick after an impact: the step's length again, both feet down.
@@ -741,7 +741,7 @@ impl Controller {
                             &leg_q,
                             self.touchdown_pitch_sigma_rad * twice,
                             self.encoder_lag_samples,
-                            true,
+                            self.touchdown_gate_rad,
                         );
                         self.pitch_after_impact_due = self.touchdown_after_impact;
                     }

@@ -81,17 +81,17 @@ impl Controller {
 
     /// The legs' pitch ([`Self::touchdown_pitch_rad`]) into the estimator, with standard
     /// deviation `sigma_rad`, against its estimate `lag_samples` IMU samples back (the
-    /// encoders' sample: `estimator.encoder_lag_samples` at a touchdown); a touchdown's
-    /// (`gated`) through `estimator.touchdown_gate_rad` (`PitchEstimator::measure_pitch_gated`).
+    /// encoders' sample: `estimator.encoder_lag_samples` at a touchdown), set aside if further
+    /// than `gate_rad` from it (0: never; a touchdown's: `estimator.touchdown_gate_rad`,
+    /// `PitchEstimator::measure_pitch_gated`).
     pub(super) fn measure_legs_pitch(
         &mut self,
         leg_q: &[f64; LEG_SLOTS],
         sigma_rad: f64,
         lag_samples: usize,
-        gated: bool,
+        gate_rad: f64,
     ) {
         let pitch = self.touchdown_pitch_rad(leg_q);
-        let gate_rad = if gated { self.touchdown_gate_rad } else { 0.0 };
         self.estimator
             .measure_pitch_gated(pitch, sigma_rad, lag_samples, gate_rad);
     }
